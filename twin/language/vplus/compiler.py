@@ -1,0 +1,442 @@
+"""AST -> Python: each V+ program becomes one Python generator function.
+
+Why compile: a tree-walking interpreter in Python runs a few hundred thousand
+statements a second; generated Python runs several times faster, and Python's
+own generators give us cooperative tasks for free: an instruction that must
+wait (a motion, CLOSEI, WAIT, a time slice) `yield`s a wait condition to the
+scheduler, and a CALL is a `yield from`.
+
+Storage of variables (V+ guide v17, "Variable Classes"):
+  * GLOBAL  -> `G["name"]`, the controller's global dictionary;
+  * LOCAL   -> `L["name"]`, one dictionary per program, shared by its calls;
+  * AUTO and parameters -> Python locals of the generated function.
+Arrays are `VArray` dictionaries stored under "name[]".  Reading a name that
+was never assigned raises KeyError/NameError, which the task turns into V+'s
+"*Undefined value*" at the right step.
+
+Parameters are passed by value-result: the callee returns its final parameter
+values and the caller writes them back into the variables it passed, which is
+what V+'s by-reference passing looks like to a program (an argument that is an
+expression, `(x)`, `loc:NULL` or `$s+""`, is not written back).
+
+Every generated line is mapped back to the V+ statement it came from
+(`CompiledProgram.line_map`), so errors report file, line and step.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from ...errors import ProgramError
+from . import ast
+from . import messages as msg
+from .keywords import FUNCTIONS, INSTRUCTIONS, STRING_FUNCTIONS
+
+# A time slice: loops hand the CPU back to the scheduler every this many
+# iterations, as the V+ scheduler preempts a task at the end of its slice.
+SLICE_ITERATIONS = 1024
+
+_RELATIONAL = {"==": "==", "<>": "!=", "<": "<", "<=": "<=", ">": ">", ">=": ">="}
+_ARITH = {"+": "+", "-": "-", "*": "*", "/": "/"}
+
+
+def mangle(name: str) -> str:
+    """A V+ name as a Python identifier (V+ names hold '.', '$', '#', '%')."""
+    return (
+        name.replace("_", "__").replace(".", "_d").replace("$", "S_").replace("#", "P_").replace("%", "B_")
+    )
+
+
+@dataclass
+class CompiledProgram:
+    name: str
+    source: str
+    line_map: dict[int, ast.Statement]  # generated line -> V+ statement
+    file: str
+    params: list[ast.Var]
+    function: object = None  # the generator function, set by the loader
+    statement_count: int = 0
+
+
+def is_string(expr: ast.Expr) -> bool:
+    """Static type of an expression: V+ marks strings with '$'."""
+    if isinstance(expr, ast.Str):
+        return True
+    if isinstance(expr, ast.Var):
+        return expr.name.startswith("$")
+    if isinstance(expr, ast.Call):
+        return expr.name.startswith("$")
+    if isinstance(expr, ast.Binary) and expr.op == "+":
+        return is_string(expr.left) or is_string(expr.right)
+    return False
+
+
+@dataclass
+class _Scope:
+    auto: set[str] = field(default_factory=set)  # names kept as Python locals
+    local: set[str] = field(default_factory=set)  # names kept in L
+    doubles: set[str] = field(default_factory=set)
+
+
+class ProgramCompiler:
+    def __init__(self, program: ast.Program):
+        self.program = program
+        self.lines: list[str] = []
+        self.line_map: dict[int, ast.Statement] = {}
+        self.scope = _Scope()
+        self.temp = 0
+        self.current: ast.Statement | None = None
+        self.count = 0
+
+    # ----------------------------------------------------------------- output
+    def emit(self, depth: int, text: str) -> None:
+        self.lines.append("    " * depth + text)
+        if self.current is not None:
+            self.line_map[len(self.lines)] = self.current
+
+    def fresh(self, stem: str) -> str:
+        self.temp += 1
+        return f"_{stem}{self.temp}"
+
+    def error(self, statement: ast.Statement, code: int, detail: str = "") -> ProgramError:
+        text = msg.message(code) + (f" {detail}" if detail else "")
+        return ProgramError(
+            text, code, file=self.program.file, line=statement.line, column=statement.column,
+            step=statement.step, program=self.program.name,
+        )
+
+    # ---------------------------------------------------------------- program
+    def compile(self) -> CompiledProgram:
+        p = self.program
+        for param in p.params:
+            self.scope.auto.add(self.key(param))
+        self.collect_declarations(p.body)
+        self.emit(0, f"def program(rt, _args):")
+        self.emit(1, "G = rt.globals")
+        self.emit(1, f"L = rt.program_locals({p.name!r})")
+        self.emit(1, "_slice = 0")
+        self.emit(1, f"if len(_args) > {len(p.params)}:")
+        self.emit(2, f"rt.too_many_arguments({p.name!r}, len(_args))")
+        for i, param in enumerate(p.params):
+            local = self.pyname(param)
+            self.emit(1, f"if len(_args) > {i} and _args[{i}] is not None:")
+            self.emit(2, f"{local} = _args[{i}]")
+        self.block(p.body, 1)
+        self.emit_return(1)
+        return CompiledProgram(p.name, "\n".join(self.lines) + "\n", self.line_map, p.file, p.params,
+                               statement_count=self.count)
+
+    def collect_declarations(self, body: list[ast.Statement]) -> None:
+        for statement in body:
+            if isinstance(statement, ast.Declare):
+                for var, _dims in statement.names:
+                    key = self.key(var if _dims is None else ast.Var(var.name, []))
+                    if statement.scope == "AUTO":
+                        self.scope.auto.add(key)
+                    elif statement.scope == "LOCAL":
+                        self.scope.local.add(key)
+
+    def emit_return(self, depth: int) -> None:
+        if not self.program.params:
+            self.emit(depth, "return ()")
+            return
+        names = ", ".join(repr(self.pyname(p)) for p in self.program.params)
+        self.emit(depth, f"return rt.results(locals(), ({names},))")
+
+    # ------------------------------------------------------------- variables
+    @staticmethod
+    def key(var: ast.Var) -> str:
+        return var.name + "[]" if var.indices is not None else var.name
+
+    def pyname(self, var: ast.Var) -> str:
+        return ("A_" if var.indices is not None else "a_") + mangle(var.name)
+
+    def storage(self, var: ast.Var) -> str:
+        """The Python expression that holds the variable (or whole array)."""
+        key = self.key(var)
+        if key in self.scope.auto:
+            return self.pyname(var)
+        if key in self.scope.local:
+            return f"L[{key!r}]"
+        return f"G[{key!r}]"
+
+    def index(self, indices: list[ast.Expr]) -> str:
+        parts = []
+        for e in indices:
+            if isinstance(e, ast.Num) and float(e.value).is_integer():
+                parts.append(str(int(e.value)))
+            else:
+                parts.append(f"_ix({self.expr(e)})")
+        return parts[0] if len(parts) == 1 else "(" + ", ".join(parts) + ")"
+
+    def read(self, var: ast.Var) -> str:
+        if var.indices:
+            return f"{self.storage(var)}[{self.index(var.indices)}]"
+        if var.indices is not None:
+            return self.storage(var)  # a whole array, a[]
+        return self.storage(var)
+
+    def assign(self, var: ast.Var, value: str, depth: int) -> None:
+        if var.indices:
+            key = self.key(var)
+            store = self.storage(var)
+            if key in self.scope.auto:
+                # An AUTO array must exist (declared with a size) before use.
+                self.emit(depth, f"{store}[{self.index(var.indices)}] = {value}")
+            else:
+                table = "L" if key in self.scope.local else "G"
+                self.emit(depth, f"_array({table}, {key!r})[{self.index(var.indices)}] = {value}")
+        else:
+            self.emit(depth, f"{self.storage(var)} = {value}")
+
+    # ----------------------------------------------------------- expressions
+    def expr(self, e: ast.Expr) -> str:
+        if isinstance(e, ast.Num):
+            return repr(float(e.value))
+        if isinstance(e, ast.Str):
+            return repr(e.value)
+        if isinstance(e, ast.Var):
+            if e.indices is None and e.name.upper() in FUNCTIONS and not e.name.startswith("#"):
+                return self.call(ast.Call(e.name.upper(), []))
+            if e.indices is None and e.name.upper() in STRING_FUNCTIONS:
+                return self.call(ast.Call(e.name.upper(), []))
+            return self.read(e)
+        if isinstance(e, ast.Call):
+            return self.call(e)
+        if isinstance(e, ast.ByCall):
+            args = ", ".join(self.expr(a) for a in [e.subject, *e.args])
+            return f"F[{e.name!r}](rt, {args})"
+        if isinstance(e, ast.Compound):
+            return f"_compound({self.expr(e.left)}, {self.expr(e.right)})"
+        if isinstance(e, ast.Unary):
+            if e.op == "-":
+                return f"(-{self.expr(e.operand)})"
+            if e.op == "NOT":
+                return f"(0.0 if {self.expr(e.operand)} else -1.0)"
+            return f"_com({self.expr(e.operand)})"
+        if isinstance(e, ast.Binary):
+            return self.binary(e)
+        raise TypeError(f"unknown expression {e!r}")
+
+    def binary(self, e: ast.Binary) -> str:
+        left, right = self.expr(e.left), self.expr(e.right)
+        op = e.op
+        if op in _RELATIONAL:
+            return f"(-1.0 if {self.relation(e)} else 0.0)"
+        if op in ("AND", "OR", "XOR"):
+            return f"(-1.0 if {self.condition(e)} else 0.0)"
+        if op in _ARITH:
+            if op == "/":
+                return f"_div({left}, {right})"
+            return f"({left} {_ARITH[op]} {right})"
+        if op == "MOD":
+            return f"_mod({left}, {right})"
+        if op in ("BAND", "BOR", "BXOR"):
+            return f"_bitwise({op!r}, {left}, {right})"
+        raise TypeError(op)
+
+    def relation(self, e: ast.Binary) -> str:
+        left, right = self.expr(e.left), self.expr(e.right)
+        if is_string(e.left) or is_string(e.right):
+            return f"_strcmp(rt, {left}, {right}, {e.op!r})"
+        return f"({left} {_RELATIONAL[e.op]} {right})"
+
+    def condition(self, e: ast.Expr) -> str:
+        """An expression as a Python truth value (V+: nonzero is true)."""
+        if isinstance(e, ast.Binary):
+            if e.op in _RELATIONAL:
+                return self.relation(e)
+            if e.op == "AND":
+                return f"({self.condition(e.left)} and {self.condition(e.right)})"
+            if e.op == "OR":
+                return f"({self.condition(e.left)} or {self.condition(e.right)})"
+            if e.op == "XOR":
+                return f"(bool({self.condition(e.left)}) != bool({self.condition(e.right)}))"
+        if isinstance(e, ast.Unary) and e.op == "NOT":
+            return f"(not {self.condition(e.operand)})"
+        return f"({self.expr(e)} != 0)"
+
+    def call(self, e: ast.Call) -> str:
+        if e.name == "DEFINED":
+            return self.defined(e)
+        table = STRING_FUNCTIONS if e.name.startswith("$") else FUNCTIONS
+        if e.name not in table:
+            raise ProgramError(f"{msg.message(msg.UNDEFINED_PROGRAM)} {e.name}", msg.UNDEFINED_PROGRAM)
+        args = ", ".join("None" if a is None else self.expr(a) for a in e.args)
+        return f"F[{e.name!r}](rt{', ' if args else ''}{args})"
+
+    def defined(self, e: ast.Call) -> str:
+        if len(e.args) != 1 or not isinstance(e.args[0], ast.Var):
+            raise ProgramError(msg.message(msg.INVALID_ARGUMENT) + " DEFINED", msg.INVALID_ARGUMENT)
+        var = e.args[0]
+        key = self.key(var)
+        if key in self.scope.auto:
+            return f"(-1.0 if {self.pyname(var)!r} in locals() else 0.0)"
+        table = "L" if key in self.scope.local else "G"
+        if var.indices:
+            return f"_defined_element({table}, {key!r}, {self.index(var.indices)})"
+        return f"(-1.0 if {key!r} in {table} else 0.0)"
+
+    # ------------------------------------------------------------ statements
+    def block(self, body: list[ast.Statement], depth: int) -> None:
+        if not any(not isinstance(s, (ast.Declare, ast.LabelOnly)) for s in body):
+            self.emit(depth, "pass")
+        for statement in body:
+            self.statement(statement, depth)
+
+    def statement(self, s: ast.Statement, depth: int) -> None:
+        self.current = s
+        self.count += 1
+        handler = getattr(self, "s_" + type(s).__name__, None)
+        if handler is None:
+            raise self.error(s, msg.UNKNOWN_KEYWORD, type(s).__name__)
+        handler(s, depth)
+
+    def s_Assign(self, s: ast.Assign, depth: int) -> None:
+        if s.target.name.startswith("$") != is_string(s.value) and not isinstance(s.value, ast.Call):
+            raise self.error(s, msg.WRONG_TYPE)
+        value = self.expr(s.value)
+        if s.target.name.startswith("$"):
+            value = f"_str({value})"
+        elif not isinstance(s.value, ast.Num):
+            value = f"_real({value})"
+        self.assign(s.target, value, depth)
+
+    def s_SetLocation(self, s: ast.SetLocation, depth: int) -> None:
+        self.assign(s.target, f"_location({self.expr(s.value)})", depth)
+
+    def s_Declare(self, s: ast.Declare, depth: int) -> None:
+        for var, dims in s.names:
+            if dims is None:
+                continue
+            target = ast.Var(var.name, [])
+            if self.key(target) in self.scope.auto:
+                self.emit(depth, f"{self.pyname(target)} = _new_array()")
+            else:
+                table = "L" if s.scope == "LOCAL" else "G"
+                self.emit(depth, f"_array({table}, {self.key(target)!r})")
+        if s.scope == "GLOBAL" or not any(d for _, d in s.names):
+            self.count -= 1  # declarations are not executable steps
+
+    def s_LabelOnly(self, s: ast.LabelOnly, depth: int) -> None:
+        self.count -= 1
+
+    def s_If(self, s: ast.If, depth: int) -> None:
+        self.emit(depth, f"if {self.condition(s.condition)}:")
+        self.block(s.body, depth + 1)
+        if s.orelse:
+            self.current = s
+            self.emit(depth, "else:")
+            self.block(s.orelse, depth + 1)
+
+    def slice_check(self, depth: int) -> None:
+        """Give the CPU back now and then: V+ time-slices tasks."""
+        self.emit(depth, "_slice += 1")
+        self.emit(depth, f"if _slice >= {SLICE_ITERATIONS}:")
+        self.emit(depth + 1, "_slice = 0")
+        self.emit(depth + 1, "yield rt.SLICE")
+
+    def s_For(self, s: ast.For, depth: int) -> None:
+        stop, step = self.fresh("stop"), self.fresh("step")
+        self.emit(depth, f"{stop} = _real({self.expr(s.stop)})")
+        self.emit(depth, f"{step} = {self.expr(s.step_by) if s.step_by else '1.0'}")
+        self.emit(depth, f"if {step} == 0: rt.zero_step()")
+        self.assign(s.target, f"_real({self.expr(s.start)})", depth)
+        current = self.read(s.target)
+        self.emit(depth, f"while ({current} <= {stop}) if {step} > 0 else ({current} >= {stop}):")
+        self.block(s.body, depth + 1)
+        self.current = s
+        self.assign(s.target, f"{self.read(s.target)} + {step}", depth + 1)
+        self.slice_check(depth + 1)
+
+    def s_While(self, s: ast.While, depth: int) -> None:
+        self.emit(depth, f"while {self.condition(s.condition)}:")
+        self.block(s.body, depth + 1)
+        self.current = s
+        self.slice_check(depth + 1)
+
+    def s_DoUntil(self, s: ast.DoUntil, depth: int) -> None:
+        self.emit(depth, "while True:")
+        self.block(s.body, depth + 1)
+        self.current = s
+        self.emit(depth + 1, f"if {self.condition(s.condition)}: break")
+        self.slice_check(depth + 1)
+
+    def s_Case(self, s: ast.Case, depth: int) -> None:
+        subject = self.fresh("case")
+        self.emit(depth, f"{subject} = {self.expr(s.subject)}")
+        keyword = "if"
+        for values, body in s.cases:
+            tests = " or ".join(f"{subject} == {self.expr(v)}" for v in values)
+            self.emit(depth, f"{keyword} {tests}:")
+            self.block(body, depth + 1)
+            self.current = s
+            keyword = "elif"
+        if s.default is not None:
+            self.emit(depth, "else:" if s.cases else "if True:")
+            self.block(s.default, depth + 1)
+
+    def s_Goto(self, s: ast.Goto, depth: int) -> None:
+        # Labels and GOTO need the jump-table form of the compiler (issue #3).
+        raise self.error(s, msg.UNKNOWN_KEYWORD, "GOTO is not supported yet")
+
+    s_IfGoto = s_Goto
+
+    def s_CallProgram(self, s: ast.CallProgram, depth: int) -> None:
+        args = ", ".join("None" if a is None else self.expr(a) for a in s.args)
+        if s.name is not None:
+            target = repr(s.name)
+        else:
+            target = f"_program_name({self.expr(s.name_expr)})"
+        results = self.fresh("ret")
+        self.emit(depth, f"{results} = yield from rt.call({target}, [{args}])")
+        for i, arg in enumerate(s.args):
+            if isinstance(arg, ast.Var) and (arg.indices is None or arg.indices):
+                self.emit(depth, f"if {results}[{i}] is not None:")
+                self.assign(arg, f"{results}[{i}]", depth + 1)
+
+    def s_TypeOut(self, s: ast.TypeOut, depth: int) -> None:
+        items = []
+        for item in s.items:
+            if isinstance(item, ast.Format):
+                items.append(f"_fmt({item.code!r}, {item.width!r}, {item.decimals!r})")
+            else:
+                items.append(self.expr(item))
+        self.emit(depth, f"rt.type_out(({', '.join(items)}{',' if len(items) == 1 else ''}))")
+
+    def s_Prompt(self, s: ast.Prompt, depth: int) -> None:
+        text = self.fresh("in")
+        self.emit(depth, f"{text} = rt.prompt({self.expr(s.text)})")
+        if s.target.name.startswith("$"):
+            self.assign(s.target, text, depth)
+        else:
+            self.assign(s.target, f"rt.prompt_number({text})", depth)
+
+    def s_Parameter(self, s: ast.Parameter, depth: int) -> None:
+        index = self.expr(s.index) if s.index is not None else "None"
+        self.emit(depth, f"rt.set_parameter({s.name!r}, {index}, {self.expr(s.value)})")
+
+    def s_Speed(self, s: ast.Speed, depth: int) -> None:
+        rotation = self.expr(s.rotation) if s.rotation is not None else "None"
+        self.emit(depth, f"rt.set_speed({self.expr(s.value)}, {rotation}, {tuple(s.modifiers)!r})")
+
+    def s_Instruction(self, s: ast.Instruction, depth: int) -> None:
+        name = s.name
+        if name == "RETURN":
+            self.emit_return(depth)
+            return
+        if name == "WAIT" and s.args:
+            # WAIT expr re-evaluates the condition each scheduling cycle.
+            self.emit(depth, f"while not {self.condition(s.args[0])}:")
+            self.emit(depth + 1, "yield rt.SLICE")
+            return
+        spec = INSTRUCTIONS.get(name)
+        if spec is None:
+            raise self.error(s, msg.UNKNOWN_KEYWORD, name)
+        args = ", ".join("None" if a is None else self.expr(a) for a in s.args)
+        call = f"I[{name!r}](rt{', ' if args else ''}{args})"
+        self.emit(depth, f"yield from {call}" if spec.waits else call)
+
+
+def compile_program(program: ast.Program) -> CompiledProgram:
+    return ProgramCompiler(program).compile()

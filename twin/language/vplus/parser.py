@@ -1,0 +1,300 @@
+"""V+ source text -> AST.
+
+`parse(text, file)` runs the lark grammar in `vplus.lark` (LALR, built once and
+cached), turns the parse tree into the dataclasses of `ast.py` and nests the
+block statements.  Syntax errors become `ProgramError`s with the file, line,
+column and offending text, and the V+ message.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+
+from lark import Lark, Token, Transformer, v_args
+from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
+
+from ...errors import ProgramError
+from . import ast
+from . import messages as msg
+from .structure import nest
+
+NAME_LENGTH = 15  # significant characters of a V+ name, not counting the prefix
+
+
+@lru_cache(maxsize=1)
+def _parser() -> Lark:
+    grammar = (Path(__file__).parent / "vplus.lark").read_text()
+    return Lark(grammar, parser="lalr", lexer="contextual", propagate_positions=True, maybe_placeholders=True)
+
+
+def normalize_name(text: str) -> str:
+    """V+ names are case-insensitive and only 15 characters are significant."""
+    text = text.lower()
+    prefix = text[0] if text[0] in "$#%" else ""
+    return prefix + text[len(prefix) :][:NAME_LENGTH]
+
+
+def parse_number(text: str) -> float:
+    """Decimal, ^H hex, ^B binary, ^D double and plain ^ octal constants."""
+    if not text.startswith("^"):
+        return float(text)
+    body = text[1:]
+    radix = {"H": 16, "B": 2, "D": 10}.get(body[:1].upper())
+    if radix is None:
+        return float(int(body, 8))
+    body = body[1:]
+    return float(body) if radix == 10 else float(int(body, radix))
+
+
+def _pos(meta_or_token) -> dict:
+    return {"line": meta_or_token.line, "column": meta_or_token.column}
+
+
+@v_args(meta=True)
+class _ToAst(Transformer):
+    """Parse tree -> AST.  Statements come out flat, one per line."""
+
+    # ---- expressions
+    def number(self, meta, children):
+        return ast.Num(parse_number(str(children[0])))
+
+    def string(self, meta, children):
+        return ast.Str(str(children[0])[1:-1])
+
+    def ascii_const(self, meta, children):
+        return ast.Num(float(ord(str(children[0])[1])))
+
+    def variable(self, meta, children):
+        name = normalize_name(str(children[0]))
+        if len(children) == 1:
+            return ast.Var(name)
+        indices = [c for c in children[1:] if c is not None]
+        return ast.Var(name, indices)
+
+    def variable_ref(self, meta, children):
+        return ast.Var(normalize_name(str(children[0])), [] if len(children) > 1 else None)
+
+    def call(self, meta, children):
+        return ast.Call(str(children[0]).upper(), children[1])
+
+    def arglist(self, meta, children):
+        return [] if children == [None] else list(children)
+
+    def shift_call(self, meta, children):
+        return ast.ByCall(str(children[0]).upper(), children[1], list(children[2:]))
+
+    def binary(self, meta, children):
+        left, op, right = children
+        op = str(op).upper()
+        return ast.Binary({"=<": "<=", "=>": ">="}.get(op, op), left, right)
+
+    def neg(self, meta, children):
+        operand = children[0]
+        if isinstance(operand, ast.Num):
+            return ast.Num(-operand.value)
+        return ast.Unary("-", operand)
+
+    def not_(self, meta, children):
+        return ast.Unary("NOT", children[1])
+
+    def com(self, meta, children):
+        return ast.Unary("COM", children[1])
+
+    def compound_(self, meta, children):
+        return ast.Compound(children[0], children[1])
+
+    # ---- statements
+    def line(self, meta, children):
+        label, statement = children
+        if statement is None:
+            if label is None:
+                return None
+            statement = ast.LabelOnly(**_pos(label))
+        if label is not None:
+            statement.label = int(str(label).strip())
+        return statement
+
+    def assignment(self, meta, children):
+        return ast.Assign(children[0], children[1], **_pos(meta))
+
+    def set_statement(self, meta, children):
+        return ast.SetLocation(children[0], children[1], **_pos(meta))
+
+    def declaration(self, meta, children):
+        scope = str(children[0]).upper()
+        double = False
+        items = []
+        for child in children[1:]:
+            if isinstance(child, Token):  # DOUBLE is anonymous; kept for clarity
+                double = True
+            elif child is not None:
+                items.append(child)
+        return ast.Declare(scope, double, items, **_pos(meta))
+
+    def decl_item(self, meta, children):
+        var = children[0]
+        dims = [c for c in children[1:] if c is not None]
+        return (ast.Var(var.name), dims or None)
+
+    def if_goto(self, meta, children):
+        return ast.IfGoto(children[0], int(children[1]), **_pos(meta))
+
+    def if_then(self, meta, children):
+        return ast.IfThen(children[0], **_pos(meta))
+
+    def else_clause(self, meta, children):
+        return ast.Else(**_pos(meta))
+
+    def end_clause(self, meta, children):
+        return ast.End(**_pos(meta))
+
+    def for_statement(self, meta, children):
+        return ast.ForHead(children[0], children[1], children[2], children[3], **_pos(meta))
+
+    def while_statement(self, meta, children):
+        return ast.WhileHead(children[0], **_pos(meta))
+
+    def do_statement(self, meta, children):
+        return ast.DoHead(**_pos(meta))
+
+    def until_statement(self, meta, children):
+        return ast.UntilTail(children[0], **_pos(meta))
+
+    def case_statement(self, meta, children):
+        return ast.CaseHead(children[0], **_pos(meta))
+
+    def value_clause(self, meta, children):
+        return ast.ValueClause([c for c in children if not isinstance(c, Token)], **_pos(meta))
+
+    def any_clause(self, meta, children):
+        return ast.AnyClause(**_pos(meta))
+
+    def goto_statement(self, meta, children):
+        return ast.Goto(int(children[0]), **_pos(meta))
+
+    def call_statement(self, meta, children):
+        return ast.CallProgram(normalize_name(str(children[0])), children[1], **_pos(meta))
+
+    def calls_statement(self, meta, children):
+        return ast.CallProgram(None, children[1], name_expr=children[0], **_pos(meta))
+
+    def type_statement(self, meta, children):
+        items = [c for c in children if c is not None]
+        return ast.TypeOut(items, **_pos(meta))
+
+    def format_item(self, meta, children):
+        text = str(children[0])[1:]
+        code, spec = text[0].upper(), text[1:]
+        width = decimals = None
+        if spec:
+            whole, _, frac = spec.partition(".")
+            width = int(whole)
+            decimals = int(frac) if frac else None
+        return ast.Format(code, width, decimals)
+
+    def prompt_statement(self, meta, children):
+        return ast.Prompt(children[0], children[1], **_pos(meta))
+
+    def parameter_statement(self, meta, children):
+        name, index, value = children
+        return ast.Parameter(name, index, value, **_pos(meta))
+
+    def dotted_name(self, meta, children):
+        return str(children[0]).upper()
+
+    def speed_statement(self, meta, children):
+        value, rotation, *mods = children
+        return ast.Speed(value, rotation, [str(m).upper() for m in mods], **_pos(meta))
+
+    def instruction(self, meta, children):
+        return ast.Instruction(str(children[0]).upper(), children[1], **_pos(meta))
+
+    # ---- units
+    def param(self, meta, children):
+        return children[0]
+
+    def program(self, meta, children):
+        name = normalize_name(str(children[0]))
+        params = [c for c in children[1:] if isinstance(c, ast.Var)]
+        body = [c for c in children[1:] if isinstance(c, ast.Statement)]
+        return ast.Program(name, params, body, file="", line=meta.line)
+
+    def data_line(self, meta, children):
+        return None if children[0] is None else (children[0].line, str(children[0]).strip())
+
+    def data_section(self, meta, children):
+        kind = str(children[0])[1:].upper()
+        return ast.DataSection(kind, [c for c in children[1:] if c is not None], file="")
+
+    def start(self, meta, children):
+        return children
+
+
+def _syntax_error(err: UnexpectedInput, text: str, file: str) -> ProgramError:
+    lines = text.splitlines()
+    line = getattr(err, "line", None)
+    column = getattr(err, "column", None)
+    if isinstance(err, UnexpectedEOF) or line is None or line < 1:
+        line = len(lines)
+        column = 1
+    source = lines[line - 1] if 0 < line <= len(lines) else ""
+    if isinstance(err, UnexpectedToken):
+        got = str(err.token) or "end of line"
+        detail = f"unexpected {got.strip()!r}"
+    elif isinstance(err, UnexpectedCharacters):
+        detail = f"unexpected character {source[column - 1:column]!r}" if column else "unexpected character"
+    else:
+        detail = "unexpected end of file"
+    return ProgramError(
+        f"{msg.message(msg.SYNTAX_ERROR)} {detail}",
+        msg.SYNTAX_ERROR,
+        file=file,
+        line=line,
+        column=column,
+        text=source,
+    )
+
+
+def parse(text: str, file: str = "<string>") -> ast.Module:
+    """Parse a whole V+ file (programs and data sections) into a Module."""
+    # The controller marks the end of a file with Ctrl-Z; lines may end in CR LF.
+    text = text.replace("\r\n", "\n").split("\x1a", 1)[0]
+    if not text.endswith("\n"):
+        text += "\n"
+    try:
+        tree = _parser().parse(text)
+        units = _ToAst().transform(tree)
+    except UnexpectedInput as err:
+        raise _syntax_error(err, text, file) from None
+    except VisitError as err:
+        if isinstance(err.orig_exc, ProgramError):
+            raise err.orig_exc.located(file=file) from None
+        raise
+    source_lines = text.splitlines()
+    module = ast.Module(file, [], [])
+    for unit in units:
+        unit.file = file
+        if isinstance(unit, ast.Program):
+            for statement in unit.body:
+                statement.step = statement.line - unit.line + 1
+            try:
+                unit.body = nest(unit.body)
+            except ProgramError as err:
+                line = err.line
+                raise err.located(
+                    file=file, program=unit.name, text=source_lines[line - 1] if line else None
+                ) from None
+            module.programs.append(unit)
+        else:
+            module.data.append(unit)
+    return module
+
+
+def parse_file(path: str | Path) -> ast.Module:
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="latin-1")
+    except OSError as err:
+        raise ProgramError(f"*Nonexistent file* {path}", file=str(path)) from None
+    return parse(text, str(path))

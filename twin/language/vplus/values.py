@@ -1,0 +1,128 @@
+"""V+ values and the operations the generated code calls.
+
+Reals are Python floats, strings are `str`, transformations are
+`controller.location.Location`, arrays are `VArray` dictionaries keyed by the
+(rounded) index or index tuple.  V+ truth values are -1.0 and 0.0.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ...controller.location import Location
+from ...errors import ProgramError
+from . import messages as msg
+
+TRUE = -1.0
+FALSE = 0.0
+MAX_STRING = 128  # V+ guide v17, "String Data Type": 0..128 characters
+
+
+class VArray(dict):
+    """A V+ array: allocated on first assignment, grows as needed, indices from 0."""
+
+    def last(self) -> float:
+        """LAST(): the highest index used in the first dimension (-1 if none)."""
+        if not self:
+            return -1.0
+        return float(max(k if isinstance(k, int) else k[0] for k in self))
+
+
+def fail(code: int, detail: str = "") -> ProgramError:
+    return ProgramError(msg.message(code) + (f" {detail}" if detail else ""), code)
+
+
+def _ix(value) -> int:
+    """An array index: reals are rounded, not truncated (V+ guide v17, "Integers")."""
+    try:
+        index = math.floor(value + 0.5)
+    except TypeError:
+        raise fail(msg.WRONG_TYPE, "array index") from None
+    if index < 0:
+        raise fail(msg.ILLEGAL_ARRAY_INDEX, str(index))
+    return index
+
+
+def _div(a, b):
+    if b == 0:
+        raise fail(msg.DIVIDE_BY_ZERO)
+    return a / b
+
+
+def _mod(a, b):
+    if b == 0:
+        raise fail(msg.DIVIDE_BY_ZERO)
+    return math.fmod(a, b)  # the remainder takes the sign of the dividend
+
+
+def to_int(value) -> int:
+    if isinstance(value, str) or isinstance(value, Location):
+        raise fail(msg.WRONG_TYPE)
+    return math.floor(value + 0.5)
+
+
+def _com(a) -> float:
+    return float(~to_int(a))
+
+
+def _bitwise(op: str, a, b) -> float:
+    x, y = to_int(a), to_int(b)
+    return float(x & y if op == "BAND" else x | y if op == "BOR" else x ^ y)
+
+
+def _strcmp(rt, a, b, op: str) -> bool:
+    if not isinstance(a, str) or not isinstance(b, str):
+        raise fail(msg.WRONG_TYPE, "string comparison")
+    if rt.switch("UPPER"):  # UPPER (default on): comparisons ignore case
+        a, b = a.upper(), b.upper()
+    return {"==": a == b, "<>": a != b, "<": a < b, "<=": a <= b, ">": a > b, ">=": a >= b}[op]
+
+
+def _str(value) -> str:
+    if not isinstance(value, str):
+        raise fail(msg.WRONG_TYPE, "string expected")
+    if len(value) > MAX_STRING:
+        raise fail(msg.STRING_TOO_LONG)
+    return value
+
+
+def _real(value) -> float:
+    if isinstance(value, (str, Location)) or value is None:
+        raise fail(msg.WRONG_TYPE, "real value expected")
+    return float(value)
+
+
+def _location(value) -> Location:
+    if not isinstance(value, Location):
+        raise fail(msg.WRONG_TYPE, "location expected")
+    return value
+
+
+def _compound(a, b) -> Location:
+    return _location(a) * _location(b)
+
+
+def _array(table: dict, key: str) -> VArray:
+    array = table.get(key)
+    if array is None:
+        array = table[key] = VArray()
+    return array
+
+
+def _new_array() -> VArray:
+    return VArray()
+
+
+def _defined_element(table: dict, key: str, index) -> float:
+    array = table.get(key)
+    return TRUE if array is not None and index in array else FALSE
+
+
+def _program_name(value) -> str:
+    from .parser import normalize_name
+
+    return normalize_name(_str(value).strip())
+
+
+def truth(value) -> float:
+    return TRUE if value else FALSE
