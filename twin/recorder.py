@@ -1,0 +1,290 @@
+"""Stream a MuJoCo run to Rerun (.rrd file and/or a live viewer), cheaply.
+
+Cost model (Rerun 0.41): each ``rr.log`` call costs ~100+ µs of Python, so nothing
+here calls ``rr.log`` per body per frame. ``sample`` copies the poses of the bodies
+that can move and the joint positions into preallocated numpy buffers (a few µs);
+every ``chunk_frames`` frames, and at ``close``, each buffer goes out with one
+``send_columns`` call per entity on the ``sim_time`` timeline (a duration, seconds).
+
+Entity layout in the viewer::
+
+    world                             the MuJoCo world frame (Z up, metres)
+    world/<body>                      one entity per body; Transform3D = body pose in world
+    world/<body>/<geom>               its geoms: static Transform3D (pose in the body) + Mesh3D
+    world/<geom>                      geoms of the world body itself (floor, tables, ...)
+    robot/joints/<joint>              joint positions as scalars (hinge: degrees, slide: mm,
+                                      as the controller reports them)
+    program/log                       TYPE output and errors (TextLog)
+    <name>                            anything sent with ``log_scalar``
+
+Bodies are flat under ``world`` (each carries its world pose, not a pose relative to
+its parent), so a body's entity path never changes with the kinematic tree. Bodies
+that cannot move (no joint in their chain to the world, not mocap) are logged once,
+static. Geoms of groups 0-2 are drawn (those MuJoCo's viewer shows by default);
+height fields and SDF geoms are skipped.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import rerun as rr
+import trimesh
+
+__all__ = ["Recorder", "geom_mesh"]
+
+TIMELINE = "sim_time"
+PLANE_HALF_SIZE = 2.0   # metres: an infinite MuJoCo plane (size 0) is drawn this big
+
+
+def _name(model: mujoco.MjModel, objtype, i: int, prefix: str) -> str:
+    return mujoco.mj_id2name(model, objtype, i) or f"{prefix}{i}"
+
+
+def _part(text: str) -> str:
+    return rr.escape_entity_path_part(text)
+
+
+def geom_mesh(model: mujoco.MjModel, g: int) -> trimesh.Trimesh | None:
+    """The geom's shape as a triangle mesh in the geom's own frame (None if not drawable)."""
+    gtype = model.geom_type[g]
+    size = model.geom_size[g]
+    T = mujoco.mjtGeom
+    if gtype == T.mjGEOM_PLANE:
+        hx = size[0] if size[0] > 0 else PLANE_HALF_SIZE
+        hy = size[1] if size[1] > 0 else PLANE_HALF_SIZE
+        v = np.array([[-hx, -hy, 0], [hx, -hy, 0], [hx, hy, 0], [-hx, hy, 0]], float)
+        return trimesh.Trimesh(v, np.array([[0, 1, 2], [0, 2, 3]]), process=False)
+    if gtype == T.mjGEOM_SPHERE:
+        return trimesh.creation.icosphere(subdivisions=2, radius=size[0])
+    if gtype == T.mjGEOM_CAPSULE:
+        return trimesh.creation.capsule(height=2 * size[1], radius=size[0], count=[24, 12])
+    if gtype == T.mjGEOM_ELLIPSOID:
+        m = trimesh.creation.icosphere(subdivisions=2, radius=1.0)
+        m.apply_scale(size[:3])
+        return m
+    if gtype == T.mjGEOM_CYLINDER:
+        return trimesh.creation.cylinder(radius=size[0], height=2 * size[1], sections=32)
+    if gtype == T.mjGEOM_BOX:
+        return trimesh.creation.box(extents=2 * size[:3])
+    if gtype == T.mjGEOM_MESH:
+        m = model.geom_dataid[g]
+        va, vn = model.mesh_vertadr[m], model.mesh_vertnum[m]
+        fa, fn = model.mesh_faceadr[m], model.mesh_facenum[m]
+        return trimesh.Trimesh(model.mesh_vert[va:va + vn].astype(float),
+                               model.mesh_face[fa:fa + fn].astype(np.int64), process=False)
+    return None   # height field, SDF: not drawn
+
+
+def _geom_rgba(model: mujoco.MjModel, g: int) -> np.ndarray:
+    rgba = model.geom_rgba[g]
+    mat = model.geom_matid[g]
+    # MuJoCo's renderer: a material's colour wins unless the geom sets its own rgba.
+    if mat >= 0 and np.allclose(rgba, [0.5, 0.5, 0.5, 1.0]):
+        rgba = model.mat_rgba[mat]
+    return np.clip(np.asarray(rgba, float), 0.0, 1.0)
+
+
+class Recorder:
+    """Record a MuJoCo simulation to Rerun.
+
+    ``path``: the .rrd file to write (parent folders are created); ``spawn``: also
+    stream to a viewer. With neither, the recorder is disabled and costs next to
+    nothing. Call ``wants_frame``/``sample`` from the physics loop, then ``close``.
+    """
+
+    def __init__(self, model: mujoco.MjModel, path: str | Path | None, app_id: str = "twin",
+                 fps: float = 30.0, spawn: bool = False, *, chunk_frames: int = 600,
+                 geom_groups: tuple[int, ...] = (0, 1, 2)) -> None:
+        if fps <= 0:
+            raise ValueError("fps must be positive")
+        self.model = model
+        self.path = Path(path) if path is not None else None
+        self.fps = float(fps)
+        self.chunk_frames = max(1, int(chunk_frames))
+        self.enabled = self.path is not None or spawn
+        self._geom_groups = tuple(geom_groups)
+        self._closed = False
+        self._next_frame = -math.inf
+        self.frames = 0
+
+        # A dedicated stream (never the global one); none at all when disabled.
+        self.rec = rr.RecordingStream(app_id) if self.enabled else None
+        if self.path is not None and spawn:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self.rec.spawn()   # attach the viewer, then replace the sinks with both
+            self.rec.set_sinks(rr.FileSink(str(self.path)), rr.GrpcSink())
+        elif self.path is not None:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self.rec.save(str(self.path))
+        elif spawn:
+            self.rec.spawn()
+
+        self._body_paths = self._entity_names()
+        self._moving = np.flatnonzero(self._moving_mask())
+        # Hinge and slide joints become scalars; free and ball joints are seen as body poses.
+        jt = model.jnt_type
+        self._joints = np.flatnonzero((jt == mujoco.mjtJoint.mjJNT_HINGE) | (jt == mujoco.mjtJoint.mjJNT_SLIDE))
+        self._joint_qadr = model.jnt_qposadr[self._joints]
+        self._joint_scale = np.where(jt[self._joints] == mujoco.mjtJoint.mjJNT_HINGE, 180.0 / math.pi, 1000.0)
+        self._joint_paths = ["robot/joints/" + _part(_name(model, mujoco.mjtObj.mjOBJ_JOINT, j, "joint"))
+                             for j in self._joints]
+
+        n, nb, nj = self.chunk_frames, len(self._moving), len(self._joints)
+        self._t = np.empty(n)
+        self._pos = np.empty((n, nb, 3))
+        self._quat = np.empty((n, nb, 4))      # MuJoCo order w, x, y, z
+        self._q = np.empty((n, nj))
+        self._k = 0                            # frames in the buffers
+        self._scalars: dict[str, tuple[list[float], list[float]]] = {}
+        self._scalar_count = 0
+
+        if self.enabled:
+            self._log_static()
+
+    # ---- set-up -----------------------------------------------------------
+
+    def _entity_names(self) -> list[str]:
+        m = self.model
+        used: set[str] = set()
+        paths = ["world"]
+        for b in range(1, m.nbody):
+            name = _part(_name(m, mujoco.mjtObj.mjOBJ_BODY, b, "body"))
+            while name in used:
+                name = f"{name}_{b}"
+            used.add(name)
+            paths.append(f"world/{name}")
+        # World-body geoms live at world/<geom>: keep them clear of body names.
+        self._used_names = used
+        return paths
+
+    def _moving_mask(self) -> np.ndarray:
+        m = self.model
+        moving = np.zeros(m.nbody, bool)
+        for b in range(1, m.nbody):   # parents come before children
+            moving[b] = m.body_jntnum[b] > 0 or m.body_mocapid[b] >= 0 or moving[m.body_parentid[b]]
+        return moving
+
+    def _log_static(self) -> None:
+        m = self.model
+        rec = self.rec
+        rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+        # Poses at the model's reference configuration: exact for bodies that cannot move.
+        d = mujoco.MjData(m)
+        mujoco.mj_kinematics(m, d)
+        moving = set(self._moving.tolist())
+        for b in range(1, m.nbody):
+            if b not in moving:
+                rec.log(self._body_paths[b], rr.Transform3D(
+                    translation=d.xpos[b], quaternion=d.xquat[b][[1, 2, 3, 0]]), static=True)
+        used = set(self._used_names)
+        for g in range(m.ngeom):
+            invisible = m.geom_rgba[g][3] == 0 and m.geom_matid[g] < 0
+            if m.geom_group[g] not in self._geom_groups or invisible:
+                continue
+            mesh = geom_mesh(m, g)
+            if mesh is None or len(mesh.faces) == 0:
+                continue
+            b = m.geom_bodyid[g]
+            name = _part(_name(m, mujoco.mjtObj.mjOBJ_GEOM, g, "geom"))
+            if b == 0:
+                while name in used:
+                    name = f"{name}_{g}"
+                used.add(name)
+            path = f"{self._body_paths[b]}/{name}"
+            shaded = mesh.smooth_shaded if m.geom_type[g] != mujoco.mjtGeom.mjGEOM_PLANE else mesh
+            rgba = _geom_rgba(m, g)
+            rec.log(path, rr.Transform3D(translation=m.geom_pos[g], quaternion=m.geom_quat[g][[1, 2, 3, 0]]),
+                    static=True)
+            rec.log(path, rr.Mesh3D(
+                vertex_positions=np.asarray(shaded.vertices, np.float32),
+                triangle_indices=np.asarray(shaded.faces, np.uint32),
+                vertex_normals=np.asarray(shaded.vertex_normals, np.float32),
+                albedo_factor=(rgba * 255).round().astype(np.uint8),
+                face_rendering=("DoubleSided" if m.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE else None),
+            ), static=True)
+
+    # ---- per frame --------------------------------------------------------
+
+    def wants_frame(self, sim_time: float) -> bool:
+        """True when a frame is due: the first call, then every 1/fps of simulated time."""
+        return self.enabled and not self._closed and sim_time >= self._next_frame - 1e-9
+
+    def sample(self, sim_time: float, data: mujoco.MjData) -> None:
+        """Record the moving bodies' world poses and the joint positions at `sim_time`."""
+        if not self.enabled or self._closed:
+            return
+        k = self._k
+        self._t[k] = sim_time
+        idx = self._moving
+        self._pos[k] = data.xpos[idx]
+        self._quat[k] = data.xquat[idx]
+        self._q[k] = data.qpos[self._joint_qadr]
+        self._k = k + 1
+        self.frames += 1
+        self._next_frame = (math.floor(sim_time * self.fps + 1e-6) + 1) / self.fps
+        if self._k == self.chunk_frames:
+            self._flush_frames()
+
+    def log_text(self, sim_time: float, text: str, level: str = "INFO") -> None:
+        """A line of program output or an error, at `sim_time` (sent at once: it is rare)."""
+        if not self.enabled or self._closed:
+            return
+        self.rec.set_time(TIMELINE, duration=sim_time)
+        self.rec.log("program/log", rr.TextLog(text, level=level))
+
+    def log_scalar(self, name: str, sim_time: float, value: float) -> None:
+        """One sample of a signal; buffered and sent with send_columns."""
+        if not self.enabled or self._closed:
+            return
+        ts, vs = self._scalars.setdefault(name, ([], []))
+        ts.append(sim_time)
+        vs.append(value)
+        self._scalar_count += 1
+        if self._scalar_count >= 50 * self.chunk_frames:
+            self._flush_scalars()
+
+    # ---- output -----------------------------------------------------------
+
+    def _flush_frames(self) -> None:
+        k = self._k
+        if k == 0:
+            return
+        times = [rr.TimeColumn(TIMELINE, duration=self._t[:k].copy())]
+        quat_xyzw = self._quat[:k][:, :, [1, 2, 3, 0]]
+        for i, b in enumerate(self._moving):
+            self.rec.send_columns(self._body_paths[b], indexes=times, columns=rr.Transform3D.columns(
+                translation=self._pos[:k, i], quaternion=quat_xyzw[:, i]))
+        q = self._q[:k] * self._joint_scale
+        for i, path in enumerate(self._joint_paths):
+            self.rec.send_columns(path, indexes=times, columns=rr.Scalars.columns(scalars=q[:, i]))
+        self._k = 0
+
+    def _flush_scalars(self) -> None:
+        for name, (ts, vs) in self._scalars.items():
+            if ts:
+                self.rec.send_columns(name, indexes=[rr.TimeColumn(TIMELINE, duration=np.asarray(ts, float))],
+                                      columns=rr.Scalars.columns(scalars=np.asarray(vs, float)))
+                ts.clear()
+                vs.clear()
+        self._scalar_count = 0
+
+    def close(self) -> None:
+        """Send what is buffered, flush, and finish the .rrd file. Safe to call twice."""
+        if self._closed:
+            return
+        if self.enabled:
+            self._flush_frames()
+            self._flush_scalars()
+            self.rec.flush()
+            self.rec.disconnect()   # closes the file sink: writes the footer
+        self._closed = True
+
+    def __enter__(self) -> "Recorder":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
