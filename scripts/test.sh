@@ -1,0 +1,9 @@
+#!/usr/bin/env bash
+# Run the test suite; arguments go to pytest (e.g. scripts/test.sh tests/test_check.py -k cli).
+set -euo pipefail
+
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+"$ROOT/scripts/bootstrap.sh"
+cd "$ROOT"
+export MUJOCO_GL="${MUJOCO_GL:-egl}"
+exec .venv/bin/python -m pytest -q "$@"
