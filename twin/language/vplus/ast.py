@@ -31,6 +31,8 @@ class Var:
 
     name: str
     indices: list["Expr"] | None = None
+    # Written in parentheses, "(x)": passed to a CALL by value, not by reference.
+    parenthesized: bool = False
 
 
 @dataclass

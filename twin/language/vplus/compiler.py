@@ -391,7 +391,7 @@ class ProgramCompiler:
         results = self.fresh("ret")
         self.emit(depth, f"{results} = yield from rt.call({target}, [{args}])")
         for i, arg in enumerate(s.args):
-            if isinstance(arg, ast.Var) and (arg.indices is None or arg.indices):
+            if isinstance(arg, ast.Var) and not arg.parenthesized and (arg.indices is None or arg.indices):
                 self.emit(depth, f"if {results}[{i}] is not None:")
                 self.assign(arg, f"{results}[{i}]", depth + 1)
 
@@ -433,7 +433,10 @@ class ProgramCompiler:
         spec = INSTRUCTIONS.get(name)
         if spec is None:
             raise self.error(s, msg.UNKNOWN_KEYWORD, name)
-        args = ", ".join("None" if a is None else self.expr(a) for a in s.args)
+        if spec.names:
+            args = ", ".join(repr(a.name.upper()) for a in s.args if isinstance(a, ast.Var))
+        else:
+            args = ", ".join("None" if a is None else self.expr(a) for a in s.args)
         call = f"I[{name!r}](rt{', ' if args else ''}{args})"
         self.emit(depth, f"yield from {call}" if spec.waits else call)
 

@@ -72,6 +72,12 @@ class _ToAst(Transformer):
         indices = [c for c in children[1:] if c is not None]
         return ast.Var(name, indices)
 
+    def paren(self, meta, children):
+        inner = children[0]
+        if isinstance(inner, ast.Var):
+            return ast.Var(inner.name, inner.indices, parenthesized=True)
+        return inner
+
     def variable_ref(self, meta, children):
         return ast.Var(normalize_name(str(children[0])), [] if len(children) > 1 else None)
 

@@ -1,0 +1,85 @@
+"""The `twin` command: run a robot program on a cell, check a report.
+
+    twin run PROGRAM [--scene SCENE] [--main NAME] [--report R.json] [--rrd R.rrd]
+                     [--max-sim-time S] [--seed N]
+    twin check REPORT --expect EXPECT.toml [--junit FILE.xml]
+
+A user's mistake (bad syntax, an unreachable location, a missing file) is
+printed as the controller would print it, with file and line, and never as a
+Python traceback.  Exit status: 0 when the program ended normally, 1 when it
+stopped on an error, 2 when the command line or an input file is wrong.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .errors import ProgramError
+
+
+def _run(args: argparse.Namespace) -> int:
+    from .runner import run_program
+
+    try:
+        result = run_program(
+            args.program, scene=args.scene, main=args.main, report_path=args.report,
+            rrd_path=args.rrd, max_sim_time=args.max_sim_time, seed=args.seed,
+        )
+    except ProgramError as err:
+        print(str(err), file=sys.stderr)
+        return 2 if err.code is None else 1
+    for error in result.report.errors:
+        where = f"{error['file']}:{error['line']}: " if error.get("file") else ""
+        step = f" at {error['program']} step {error['step']}" if error.get("step") else ""
+        print(f"{where}{error['message']}{step}", file=sys.stderr)
+    report = result.report
+    rate = report.sim_time_s / report.wall_time_s if report.wall_time_s > 0 else float("inf")
+    regions = ", ".join(f"{name} {count}" for name, count in report.regions.items() if count)
+    print(
+        f"twin: {report.sim_time_s:.1f} s simulated in {report.wall_time_s:.1f} s "
+        f"({rate:.1f}x real time); {len(report.parts)} parts: {regions or 'none placed'}",
+        file=sys.stderr,
+    )
+    return 1 if report.errors else 0
+
+
+def _check(args: argparse.Namespace) -> int:
+    from .check import main_check
+
+    argv = [args.report, "--expect", args.expect]
+    if args.junit:
+        argv += ["--junit", args.junit]
+    return main_check(argv)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="twin", description="Run robot programs on a digital twin of the cell.")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    run = sub.add_parser("run", help="run a V+ program on a cell")
+    run.add_argument("program", help="V+ program file (.pg, .v2)")
+    run.add_argument("--scene", default=None, help="cell description (default: scenes/scara_pick.toml)")
+    run.add_argument("--main", default=None, help="program to execute (default: the first .PROGRAM)")
+    run.add_argument("--report", default=None, help="write the placement report (JSON) here")
+    run.add_argument("--rrd", default=None, help="write a Rerun recording here")
+    run.add_argument("--max-sim-time", type=float, default=3600.0, help="stop after this many simulated seconds")
+    run.add_argument("--seed", type=int, default=None, help="random seed (default: the scene's)")
+    run.set_defaults(handler=_run)
+
+    check = sub.add_parser("check", help="check a report against expectations")
+    check.add_argument("report")
+    check.add_argument("--expect", required=True)
+    check.add_argument("--junit", default=None, help="also write a JUnit XML report")
+    check.set_defaults(handler=_check)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    return args.handler(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

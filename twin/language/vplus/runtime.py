@@ -1,0 +1,313 @@
+"""The V+ system: programs in memory, global variables, parameters, switches
+and the tasks that run programs.
+
+`VPlusSystem.load(path)` parses and compiles a file; `start(name)` makes a
+task whose generator the shared scheduler runs.  Errors raised inside a
+program are turned into `ProgramError`s that name the V+ step, file line and
+the controller's message, and stop the task as the controller would.
+"""
+
+from __future__ import annotations
+
+import sys
+import traceback
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Iterator, TextIO
+
+import numpy as np
+
+from ...controller.location import Location
+from ...errors import ProgramError
+from . import messages as msg
+from . import values
+from .compiler import CompiledProgram, compile_program
+from .formats import _fmt, render
+from .keywords import FUNCTIONS, INSTRUCTIONS, STRING_FUNCTIONS
+from .parser import normalize_name, parse, parse_file
+
+# Parameters and their defaults (V+ guide v17, "System Parameters").
+PARAMETER_DEFAULTS = {"HAND.TIME": 0.05, "BELT.MODE": 0.0, "NOT.CALIBRATED": 0.0, "TERMINAL": 4.0}
+# Switches and their defaults (V+ guide v17, "System Switches").
+SWITCH_DEFAULTS = {
+    "CP": True, "UPPER": True, "MESSAGES": True, "DRY.RUN": False, "BELT": False, "POWER": True,
+    "TRACE": False, "DECEL.100": False, "FORCE": False, "INTERACTIVE": True, "SET.SPEED": True,
+}
+MAJOR_CYCLE = 0.016  # s: the V+ scheduler's major cycle and trajectory period
+MAX_CALL_DEPTH = 200  # "*Too many subroutine calls*" past this many nested CALLs
+
+
+class StopProgram(Exception):
+    """STOP, HALT or RETURN from the top-level program: the task ends normally."""
+
+
+def parse_real(text: str) -> float:
+    """VAL(): the number at the start of a string, 0 if there is none."""
+    text = text.strip()
+    for end in range(len(text), 0, -1):
+        try:
+            return float(text[:end])
+        except ValueError:
+            continue
+    return 0.0
+
+
+def _pick(names: dict, key: str) -> str:
+    """Parameter and switch names may be shortened to a unique prefix."""
+    key = key.upper()
+    if key in names:
+        return key
+    matches = [n for n in names if n.startswith(key)]
+    if len(matches) != 1:
+        raise values.fail(msg.ILLEGAL_VALUE, f"unknown or ambiguous name {key}")
+    return matches[0]
+
+
+@dataclass
+class Console:
+    """The system terminal: TYPE output and PROMPT input."""
+
+    stdin: TextIO = field(default_factory=lambda: sys.stdin)
+    echo: TextIO | None = field(default_factory=lambda: sys.stdout)
+    text: list[str] = field(default_factory=list)
+
+    def write(self, s: str) -> None:
+        self.text.append(s)
+        if self.echo is not None:
+            self.echo.write(s)
+            self.echo.flush()
+
+    def read_line(self) -> str | None:
+        line = self.stdin.readline()
+        return None if line == "" else line.rstrip("\r\n")
+
+    @property
+    def output(self) -> str:
+        return "".join(self.text)
+
+
+class VPlusSystem:
+    """Controller memory for V+: programs, variables, parameters, switches."""
+
+    def __init__(self, robot, io, clock: Callable[[], float], console: Console | None = None, seed: int = 0):
+        self.robot = robot  # the shared virtual controller (motion, hand)
+        self.io = io  # digital signals
+        self.clock = clock  # simulated time, s
+        self.console = console or Console()
+        self.globals: dict = {}
+        self.locals: dict[str, dict] = {}
+        self.programs: dict[str, CompiledProgram] = {}
+        self.parameters = dict(PARAMETER_DEFAULTS)
+        self.switches = dict(SWITCH_DEFAULTS)
+        self.random = np.random.default_rng(seed)
+        self.tasks: list[Task] = []
+
+    # ------------------------------------------------------------ loading
+    def load(self, path: str | Path) -> list[str]:
+        """LOAD a file: parse, compile; returns the program names in file order."""
+        return self._load_module(parse_file(path))
+
+    def load_text(self, text: str, file: str = "<string>") -> list[str]:
+        return self._load_module(parse(text, file))
+
+    def _load_module(self, module) -> list[str]:
+        names = []
+        for program in module.programs:
+            compiled = compile_program(program)
+            namespace = dict(_NAMESPACE)
+            code = compile(compiled.source, f"<vplus:{program.name}>", "exec")
+            exec(code, namespace)
+            compiled.function = namespace["program"]
+            self.programs[program.name] = compiled
+            names.append(program.name)
+        for section in module.data:
+            from .data import load_data_section
+
+            load_data_section(section, self.globals)
+        return names
+
+    def define_location(self, name: str, location: Location) -> None:
+        self.globals[normalize_name(name)] = location
+
+    # ------------------------------------------------------------ tasks
+    def start(self, program: str, number: int = 0, args: list | None = None) -> "Task":
+        name = normalize_name(program)
+        if name not in self.programs:
+            raise ProgramError(f"{msg.message(msg.UNDEFINED_PROGRAM)} {program}", msg.UNDEFINED_PROGRAM)
+        task = Task(self, number, name, args or [])
+        self.tasks.append(task)
+        return task
+
+
+class _Slice:
+    """Yielded at the end of a time slice: resume at the next major cycle."""
+
+    def __repr__(self) -> str:
+        return "SLICE"
+
+
+class Task:
+    """One V+ task running a program.  `rt` in the generated code."""
+
+    SLICE = _Slice()
+
+    def __init__(self, system: VPlusSystem, number: int, program: str, args: list):
+        self.system = system
+        self.number = number
+        self.program = program
+        self.globals = system.globals
+        self.robot = system.robot
+        self.io = system.io
+        self.random = system.random
+        self.depth = 0
+        self.last_error: int | None = None
+        self.error: ProgramError | None = None
+        self.finished = False
+        self.generator = self._run(args)
+
+    # ------------------------------------------------------------ running
+    def _run(self, args: list) -> Iterator:
+        try:
+            yield from self.call(self.program, args)
+        except StopProgram:
+            pass
+        except ProgramError as err:
+            self.error = self._locate(err, err.__traceback__)
+            self.last_error = err.code
+        except (KeyError, NameError, ZeroDivisionError, TypeError, IndexError) as err:
+            self.error = self._translate(err)
+            self.last_error = self.error.code
+        finally:
+            self.finished = True
+
+    def _frames(self, tb) -> list[tuple[CompiledProgram, int]]:
+        found = []
+        for frame, lineno in traceback.walk_tb(tb):
+            filename = frame.f_code.co_filename
+            if filename.startswith("<vplus:"):
+                found.append((self.system.programs[filename[7:-1]], lineno))
+        return found
+
+    def _locate(self, err: ProgramError, tb) -> ProgramError:
+        frames = self._frames(tb)
+        if frames:
+            compiled, lineno = frames[-1]
+            statement = compiled.line_map.get(lineno)
+            if statement is not None:
+                err.located(
+                    file=compiled.file, line=statement.line, column=statement.column,
+                    step=statement.step, program=compiled.name,
+                    text=_source_line(compiled.file, statement.line),
+                )
+        return err
+
+    def _translate(self, err: Exception) -> ProgramError:
+        """A Python error inside generated code is the program's error."""
+        frames = self._frames(err.__traceback__)
+        innermost = traceback.extract_tb(err.__traceback__)[-1].filename
+        if not frames or not innermost.startswith(("<vplus:", str(Path(values.__file__).parent))):
+            raise err  # not the program's fault: a bug in twin, let it show
+        if isinstance(err, (KeyError, NameError)):
+            name = err.args[0] if isinstance(err, KeyError) else getattr(err, "name", "")
+            problem = ProgramError(f"{msg.message(msg.UNDEFINED_VALUE)} {name}", msg.UNDEFINED_VALUE)
+        elif isinstance(err, ZeroDivisionError):
+            problem = ProgramError(msg.message(msg.DIVIDE_BY_ZERO), msg.DIVIDE_BY_ZERO)
+        else:
+            problem = ProgramError(msg.message(msg.WRONG_TYPE), msg.WRONG_TYPE)
+        return self._locate(problem, err.__traceback__)
+
+    def call(self, name: str, args: list):
+        compiled = self.system.programs.get(name)
+        if compiled is None:
+            raise ProgramError(f"{msg.message(msg.UNDEFINED_PROGRAM)} {name}", msg.UNDEFINED_PROGRAM)
+        if self.depth >= MAX_CALL_DEPTH:
+            raise ProgramError(msg.message(msg.TOO_MANY_CALLS), msg.TOO_MANY_CALLS)
+        self.depth += 1
+        try:
+            return (yield from compiled.function(self, args))
+        finally:
+            self.depth -= 1
+
+    def program_locals(self, name: str) -> dict:
+        return self.system.locals.setdefault(name, {})
+
+    @staticmethod
+    def results(frame_locals: dict, names: tuple) -> list:
+        return [frame_locals.get(n) for n in names]
+
+    def too_many_arguments(self, name: str, count: int) -> None:
+        raise values.fail(msg.INVALID_ARGUMENT, f"{count} arguments for {name}")
+
+    def zero_step(self) -> None:
+        raise values.fail(msg.ILLEGAL_VALUE, "FOR loop STEP 0")
+
+    def stop(self) -> None:
+        raise StopProgram()
+
+    halt = stop
+
+    # ------------------------------------------------------------ time
+    def sleep(self, seconds: float):
+        """Wait `seconds` of simulated time."""
+        end = self.system.clock() + seconds
+        clock = self.system.clock
+        yield lambda: clock() >= end - 1e-9
+
+    def timer(self, number: int) -> float:
+        return self.system.clock()
+
+    def hand_time(self) -> float:
+        # HAND.TIME is rounded to a multiple of the 16 ms major cycle (V+ guide v17).
+        cycles = round(self.system.parameters["HAND.TIME"] / MAJOR_CYCLE)
+        return cycles * MAJOR_CYCLE
+
+    # ------------------------------------------------------------ terminal
+    def type_out(self, items: tuple) -> None:
+        text, newline = render(items)
+        if self.system.switches["MESSAGES"]:
+            self.system.console.write(text + ("\n" if newline else ""))
+
+    def prompt(self, text) -> str:
+        self.system.console.write(values._str(text))
+        line = self.system.console.read_line()
+        if line is None:
+            raise values.fail(msg.UNEXPECTED_EOF)
+        return line
+
+    def prompt_number(self, text: str) -> float:
+        try:
+            return float(text.strip())
+        except ValueError:
+            raise values.fail(msg.ILLEGAL_VALUE, f"not a number: {text!r}") from None
+
+    # ------------------------------------------------------------ settings
+    def set_parameter(self, name: str, index, value) -> None:
+        key = _pick(self.system.parameters, name)
+        self.system.parameters[key] = values._real(value)
+
+    def switch(self, name: str) -> bool:
+        return self.system.switches[_pick(self.system.switches, name)]
+
+    def set_switch(self, name: str, on: bool) -> None:
+        self.system.switches[_pick(self.system.switches, name)] = on
+
+    def set_speed(self, value, rotation, modifiers: tuple) -> None:
+        self.robot.set_speed(values._real(value), always="ALWAYS" in modifiers,
+                             monitor="MONITOR" in modifiers,
+                             units="MMPS" if "MMPS" in modifiers else "IPS" if "IPS" in modifiers else None)
+
+
+def _source_line(file: str, line: int) -> str | None:
+    try:
+        return Path(file).read_text(encoding="latin-1").splitlines()[line - 1]
+    except (OSError, IndexError):
+        return None
+
+
+# The names the generated code sees.
+_NAMESPACE = {
+    "F": {**FUNCTIONS, **STRING_FUNCTIONS},
+    "I": {name: spec.function for name, spec in INSTRUCTIONS.items()},
+    "_fmt": _fmt,
+    **{name: getattr(values, name) for name in dir(values) if name.startswith("_") and not name.startswith("__")},
+}

@@ -1,0 +1,104 @@
+"""A cell, its controller and the programs running on it, stepped together.
+
+The pipeline, once per major cycle (16 ms, the V+ scheduler's cycle):
+  tasks run until they wait (scheduler) -> the controller feeds the servos
+  each physics step -> the cell steps MuJoCo (grippers, feeder, belt) ->
+  the recorder samples a frame when one is due.
+Simulated time drives everything; nothing waits on the wall clock.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .controller.controller import MotionSettings, VirtualController
+from .controller.io import DigitalIO
+from .controller.kinematics import RobotKinematics
+from .controller.location import Location
+from .controller.scheduler import Scheduler
+from .errors import ProgramError
+from .physics.cell import Cell
+
+MAJOR_CYCLE_S = 0.016
+REPO_ROOT = Path(__file__).resolve().parent.parent
+DEFAULT_SCENE = REPO_ROOT / "scenes" / "scara_pick.toml"
+
+
+@dataclass
+class RunOutcome:
+    sim_time_s: float
+    wall_time_s: float
+    program_time_s: float  # when the last program task ended
+    errors: list[dict] = field(default_factory=list)
+
+
+class Simulation:
+    """A loaded cell with its robot controller, I/O and task scheduler."""
+
+    def __init__(self, scene: str | Path = DEFAULT_SCENE, seed: int | None = None, recorder=None):
+        self.scene_path = Path(scene)
+        self.cell = Cell.from_scene(self.scene_path, seed=seed)
+        robot = self.cell.scene["robot"]
+        self.kinematics = RobotKinematics.from_mjcf(_resolve(robot["model"], self.scene_path))
+        controller_cfg = self.cell.scene.get("controller", {})
+        settings = MotionSettings(
+            monitor_speed=float(controller_cfg.get("monitor_speed", MotionSettings.monitor_speed)),
+            cartesian_speed_mm_s=float(
+                controller_cfg.get("cartesian_speed_mm_s", MotionSettings.cartesian_speed_mm_s)
+            ),
+        )
+        self.controller = VirtualController(self.cell, self.kinematics, settings)
+        self.io = DigitalIO()
+        self.scheduler = Scheduler()
+        self.recorder = recorder
+        self.settle_s = float(controller_cfg.get("settle_after_program_s", 3.0))
+
+    def taught_locations(self) -> dict[str, Location]:
+        return {name: Location(*values) for name, values in self.cell.locations().items()}
+
+    def clock(self) -> float:
+        return self.cell.time
+
+    def run(self, max_sim_time: float = 3600.0) -> RunOutcome:
+        """Run until every task has ended and the cell has settled."""
+        wall_start = time.perf_counter()
+        cell, controller, scheduler = self.cell, self.controller, self.scheduler
+        steps = max(1, round(MAJOR_CYCLE_S / cell.timestep))
+        errors: list[dict] = []
+        program_end = None
+        while True:
+            if program_end is None:
+                scheduler.run_cycle()
+                for task in scheduler.tasks:
+                    error = getattr(task, "error", None)
+                    if error is not None and not getattr(task, "reported", False):
+                        task.reported = True
+                        controller.stop()
+                        errors.append(error.as_dict(cell.time))
+                if not scheduler.alive:
+                    program_end = cell.time
+            # After the programs end the robot finishes its motion and parts come to rest.
+            elif not controller.moving and cell.time >= program_end + self.settle_s:
+                break
+            if cell.time >= max_sim_time:
+                error = ProgramError(f"*Simulation time limit reached* ({max_sim_time:g} s)")
+                errors.append(error.as_dict(cell.time))
+                program_end = program_end if program_end is not None else cell.time
+                break
+            for _ in range(steps):
+                controller.servo_step()
+                cell.step(1)
+            if self.recorder is not None and self.recorder.wants_frame(cell.time):
+                self.recorder.sample(cell.time, cell.data)
+        return RunOutcome(cell.time, time.perf_counter() - wall_start, program_end, errors)
+
+
+def _resolve(path: str, scene_path: Path) -> Path:
+    """Model paths in a scene are relative to the repository or to the scene file."""
+    for base in (scene_path.parent, REPO_ROOT):
+        candidate = (base / path).resolve()
+        if candidate.exists():
+            return candidate
+    return Path(path)
