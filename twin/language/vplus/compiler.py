@@ -111,7 +111,9 @@ class ProgramCompiler:
         for param in p.params:
             self.scope.auto.add(self.key(param))
         self.collect_declarations(p.body)
-        self.emit(0, f"def program(rt, _args):")
+        self.emit(0, "def program(rt, _args):")
+        self.emit(1, "if False:  # every program is a generator, even one that never waits")
+        self.emit(2, "yield")
         self.emit(1, "G = rt.globals")
         self.emit(1, f"L = rt.program_locals({p.name!r})")
         self.emit(1, "_slice = 0")
