@@ -1,0 +1,504 @@
+"""The physical cell: robot + gripper + feeder + outfeed belt + bin + parts, in MuJoCo.
+
+Built from a scene file (``scenes/*.toml``) with ``mujoco.MjSpec``:
+
+* the robot MJCF is the base spec (its names, j1..j4 and <joint>_pos/_vel actuators, are
+  kept), its root body moved to the scene's base pose;
+* the gripper MJCF is attached at the robot's flange site with a prefix;
+* table, nest, belt (a static box with ``surfacevel``), bin and a pool of parts are added;
+* one inactive weld per part (gripper palm -> part) is declared for grasping.
+
+Grasping is by friction, made robust with a weld that engages only from real contact:
+when the gripper is commanded closed and BOTH pads touch the same part, the current
+relative pose is written into the weld and the weld is activated; it is released when
+the gripper opens, or when its constraint force exceeds the friction capacity
+2 * mu * grip force (slip: the part is dropped and falls).
+
+Units: SI inside (m, rad, kg, N, s); reports give positions in mm.
+"""
+
+from __future__ import annotations
+
+import math
+import time as _time
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from .geometry import MM, flange_ik, matrix_to_quat, vplus_to_matrix, yaw_quat
+from .regions import Regions
+from .scene import load_scene, resolve
+
+PARK_Z = -0.5  # m: pooled parts wait under the floor, contacts off, gravity compensated
+GRASP_WINDOW_S = 0.3  # s after a close command during which a grasp may engage
+SLIP_GRACE_S = 0.05  # s after a grasp before slip is checked (grip force builds up)
+FLOOR_CHECK_S = 0.1  # s between checks for parts on the floor
+
+
+class Cell:
+    """A MuJoCo model of the work cell and the physics-side logic (feeder, grasp, slip).
+
+    Attributes: ``model``/``data`` (MuJoCo), ``scene`` (parsed TOML), ``timestep`` (s),
+    ``robot_joint_names``, ``seed`` (feeder seed in use), ``regions``.
+    """
+
+    # ------------------------------------------------------------------ construction
+    @classmethod
+    def from_scene(cls, path: str | Path, seed: int | None = None) -> "Cell":
+        """Load a scene file; ``seed`` overrides the scene's feeder seed."""
+        path = Path(path)
+        return cls(load_scene(path), path, seed)
+
+    def __init__(self, scene: dict, scene_path: Path, seed: int | None = None):
+        self.scene = scene
+        self.scene_path = Path(scene_path)
+        feeder = scene["feeder"]
+        self.seed: int = int(seed if seed is not None else feeder.get("seed", 0))
+        self.regions = Regions(scene["regions"])
+        self.robot_joint_names: list[str] = ["j1", "j2", "j3", "j4"]
+        self._build_model()
+        self._init_runtime()
+
+    def _build_model(self) -> None:
+        sc = self.scene
+        phys = sc.get("physics", {})
+        spec = mujoco.MjSpec.from_file(str(resolve(sc["robot"]["model"], self.scene_path)))
+        spec.modelname = "twin_cell"
+        self.sleep_enabled = bool(phys.get("sleep", True))
+
+        # Options.
+        spec.option.timestep = float(phys.get("timestep", 0.002))
+        integrators = {"implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
+                       "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,
+                       "euler": mujoco.mjtIntegrator.mjINT_EULER,
+                       "rk4": mujoco.mjtIntegrator.mjINT_RK4}
+        spec.option.integrator = integrators[phys.get("integrator", "implicitfast")]
+        if self.sleep_enabled:
+            spec.option.enableflags |= int(mujoco.mjtEnableBit.mjENBL_SLEEP)
+
+        # Robot base pose on the table; the robot never sleeps (its servos move it).
+        robot_root = spec.worldbody.first_body()
+        self._robot_root = robot_root.name
+        self._base_T = vplus_to_matrix(sc["robot"].get("base", [0, 0, 0, 0, 0, 0]))
+        robot_root.pos = self._base_T[:3, 3]
+        robot_root.quat = matrix_to_quat(self._base_T[:3, :3])
+        # The moving tree's root (first body with a joint under the static base).
+        robot_root.first_body().sleep = mujoco.mjtSleepPolicy.mjSLEEP_NEVER
+
+        # Gripper at the flange.
+        g = sc["gripper"]
+        gspec = mujoco.MjSpec.from_file(str(resolve(g["model"], self.scene_path)))
+        self._gp = g.get("prefix", "gripper/")
+        spec.attach(gspec, prefix=self._gp, site=spec.site(g.get("site", "flange")))
+
+        wb = spec.worldbody
+        spec.visual.headlight.ambient = [0.4, 0.4, 0.4]
+        wb.add_light(name="cell_light", pos=[0.2, 0.2, 2.5], dir=[0, 0, -1], diffuse=[0.6, 0.6, 0.6])
+        wb.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[3, 3, 0.05],
+                    rgba=[0.5, 0.5, 0.52, 1])
+
+        # Table.
+        t = sc["table"]
+        self.table_top_z = (t["center"][2] + t["size"][2] / 2) / MM
+        wb.add_geom(name="table", type=mujoco.mjtGeom.mjGEOM_BOX, pos=np.array(t["center"]) / MM,
+                    size=np.array(t["size"]) / MM / 2, rgba=[0.62, 0.5, 0.38, 1])
+
+        # Feeder nest: a plate on a pedestal, top face at the nest pose.
+        f = sc["feeder"]
+        nest = np.array(f["nest"], dtype=float) / MM
+        nsize = np.array(f.get("nest_size", [44.0, 44.0]), dtype=float) / MM
+        h = nest[2] - self.table_top_z
+        wb.add_geom(name="nest", type=mujoco.mjtGeom.mjGEOM_BOX,
+                    pos=[nest[0], nest[1], self.table_top_z + h / 2],
+                    quat=yaw_quat(math.radians(f.get("nest_yaw", 0.0))),
+                    size=[nsize[0] / 2, nsize[1] / 2, h / 2], rgba=[0.25, 0.45, 0.3, 1])
+        self._nest_top = nest
+
+        # Outfeed belt: a thin static box with surfacevel (moves what touches it, any face),
+        # side rails, and a support that collides with nothing.
+        c = sc["conveyor"]
+        top = np.array(c["top_center"], dtype=float) / MM
+        width, length, thick = (v / MM for v in c["size"])
+        d = np.array(c.get("direction", [1.0, 0.0]), dtype=float)
+        d /= np.linalg.norm(d)
+        yaw = math.atan2(d[1], d[0])
+        q = yaw_quat(yaw)
+        speed = float(c["speed"]) / MM
+        belt = wb.add_geom(name="belt", type=mujoco.mjtGeom.mjGEOM_BOX, pos=top - [0, 0, thick / 2],
+                           quat=q, size=[length / 2, width / 2, thick / 2], rgba=[0.15, 0.15, 0.15, 1],
+                           friction=[0.8, 0.005, 0.0001])
+        belt.surfacevel = np.array([speed, 0.0, 0.0, 0.0, 0.0, 0.0])  # geom frame: local x = travel direction (checked by test)
+        rail_h = float(c.get("rail_height", 8.0)) / MM
+        side = np.array([-d[1], d[0], 0.0])
+        for k, s in (("left", 1.0), ("right", -1.0)):
+            wb.add_geom(name=f"belt_rail_{k}", type=mujoco.mjtGeom.mjGEOM_BOX,
+                        pos=top + s * side * (width / 2 + 0.004) + [0, 0, (rail_h - thick) / 2], quat=q,
+                        size=[length / 2, 0.004, (rail_h + thick) / 2], rgba=[0.7, 0.7, 0.72, 1])
+        frame_h = top[2] - thick - self.table_top_z
+        if frame_h > 0:
+            wb.add_geom(name="belt_frame", type=mujoco.mjtGeom.mjGEOM_BOX, contype=0, conaffinity=0,
+                        pos=[top[0], top[1], self.table_top_z + frame_h / 2], quat=q,
+                        size=[length / 2 * 0.95, width / 2, frame_h / 2], rgba=[0.4, 0.4, 0.45, 1])
+        self.belt_speed = speed
+
+        # Bin: floor + four walls, inner floor at floor_center.
+        b = sc["bin"]
+        fc = np.array(b["floor_center"], dtype=float) / MM
+        ix, iy, ih = (v / MM for v in b["inner_size"])
+        w = float(b.get("wall", 8.0)) / MM
+        col = [0.2, 0.3, 0.6, 1]
+        wb.add_geom(name="bin_floor", type=mujoco.mjtGeom.mjGEOM_BOX, pos=fc + [0, 0, w / 2 - w],
+                    size=[ix / 2 + w, iy / 2 + w, w / 2], rgba=col)
+        for name, pos, size in (
+            ("bin_wall_xn", [-(ix + w) / 2, 0, ih / 2], [w / 2, iy / 2 + w, ih / 2]),
+            ("bin_wall_xp", [(ix + w) / 2, 0, ih / 2], [w / 2, iy / 2 + w, ih / 2]),
+            ("bin_wall_yn", [0, -(iy + w) / 2, ih / 2], [ix / 2, w / 2, ih / 2]),
+            ("bin_wall_yp", [0, (iy + w) / 2, ih / 2], [ix / 2, w / 2, ih / 2]),
+        ):
+            wb.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, pos=fc + pos, size=size, rgba=col)
+
+        # Part pool: free bodies parked under the floor, no contacts, gravity compensated.
+        p = sc["part"]
+        half = np.array(p["size"], dtype=float) / MM / 2
+        self.part_half = half
+        npool = int(f["pool"])
+        self._npool = npool
+        friction = float(p.get("friction", 0.5))
+        for i in range(npool):
+            body = wb.add_body(name=f"part_{i}", pos=self._park_pos(i), gravcomp=1.0)
+            if self.sleep_enabled:
+                body.sleep = mujoco.mjtSleepPolicy.mjSLEEP_INIT
+            body.add_freejoint(name=f"part_{i}_free")
+            body.add_geom(name=f"part_{i}_geom", type=mujoco.mjtGeom.mjGEOM_BOX, size=half,
+                          mass=float(p["mass"]), friction=[friction, 0.005, 0.0001],
+                          contype=0, conaffinity=0, rgba=p.get("rgba", [0.9, 0.55, 0.1, 1.0]))
+            spec.add_equality(name=f"grasp_{i}", type=mujoco.mjtEq.mjEQ_WELD,
+                              objtype=mujoco.mjtObj.mjOBJ_BODY, name1=f"{self._gp}gripper_base",
+                              name2=f"part_{i}", active=False, solref=[0.004, 1.0])
+
+        self.spec = spec
+        self.model = spec.compile()
+        self.data = mujoco.MjData(self.model)
+
+    @staticmethod
+    def _park_pos(i: int) -> list[float]:
+        return [-1.0 + 0.06 * (i % 20), -1.5 + 0.06 * (i // 20), PARK_Z]
+
+    def _init_runtime(self) -> None:
+        m, d = self.model, self.data
+        self.timestep: float = float(m.opt.timestep)
+        jids = [m.joint(n).id for n in self.robot_joint_names]
+        self._rq = np.array([m.jnt_qposadr[j] for j in jids])
+        self._rv = np.array([m.jnt_dofadr[j] for j in jids])
+        self._act_pos = np.array([m.actuator(f"{n}_pos").id for n in self.robot_joint_names])
+        self._act_vel = np.array([m.actuator(f"{n}_vel").id for n in self.robot_joint_names])
+        gp = self._gp
+        self._finger_act = np.array([m.actuator(f"{gp}finger_left_act").id,
+                                     m.actuator(f"{gp}finger_right_act").id])
+        self._close_ctrl = m.actuator_ctrlrange[self._finger_act, 1].copy()
+        self._pads = (m.geom(f"{gp}pad_left").id, m.geom(f"{gp}pad_right").id)
+        self._palm = m.body(f"{gp}gripper_base").id
+        self._tcp = m.site(f"{gp}tcp").id
+        n = self._npool
+        self._part_body = np.array([m.body(f"part_{i}").id for i in range(n)])
+        self._part_geom = np.array([m.geom(f"part_{i}_geom").id for i in range(n)])
+        self._part_qadr = np.array([m.jnt_qposadr[m.joint(f"part_{i}_free").id] for i in range(n)])
+        self._part_dadr = np.array([m.jnt_dofadr[m.joint(f"part_{i}_free").id] for i in range(n)])
+        self._part_eq = np.array([m.equality(f"grasp_{i}").id for i in range(n)])
+        self._geom_part = np.full(m.ngeom, -1, dtype=int)
+        self._geom_part[self._part_geom] = np.arange(n)
+        pad_mu = max(m.geom_friction[self._pads[0], 0], m.geom_friction[self._pads[1], 0])
+        self.grip_mu = float(max(pad_mu, m.geom_friction[self._part_geom[0], 0]))
+
+        phys = self.scene.get("physics", {})
+        self._check_steps = max(1, round(float(phys.get("check_interval", 0.01)) / self.timestep))
+        self._floor_steps = max(1, round(FLOOR_CHECK_S / self.timestep))
+
+        f = self.scene["feeder"]
+        self._rng = np.random.default_rng(self.seed)
+        self._feeder_delay = float(f.get("delay", 0.3))
+        self._jitter_xy = float(f.get("jitter_xy", 0.0)) / MM
+        self._jitter_yaw = math.radians(float(f.get("jitter_yaw", 0.0)))
+        self._nest_yaw = math.radians(float(f.get("nest_yaw", 0.0)))
+
+        # Runtime state.
+        self._events: list[dict] = []
+        self._presented: list[int] = []
+        self._presented_bodies = np.zeros(0, dtype=int)
+        self._dropped = np.zeros(n, dtype=bool)
+        self._held: int | None = None
+        self._held_since = 0.0
+        self._closed = False
+        self._grasp_until = -1.0
+        self._nest_empty_since: float | None = 0.0
+        self._feeder_exhausted = False
+        self._steps_to_check = 1
+        self._steps_to_floor = self._floor_steps
+        self.wall_time_in_step = 0.0
+
+        # Home: the robot at the IK of the home location, held by its servos; gripper open.
+        home = self.scene["robot"].get("home", "start")
+        q = flange_ik(m, self._base_T @ vplus_to_matrix(self.scene["locations"][home]),
+                      self.robot_joint_names, righty=True)
+        d.qpos[self._rq] = q
+        d.ctrl[self._act_pos] = q
+        d.ctrl[self._act_vel] = 0.0
+        d.ctrl[self._finger_act] = 0.0
+        mujoco.mj_forward(m, d)
+
+    # ------------------------------------------------------------------ robot interface
+    @property
+    def time(self) -> float:
+        """Simulated time, s."""
+        return float(self.data.time)
+
+    def robot_qpos(self) -> np.ndarray:
+        """Robot joint positions (rad for j1/j2/j4, m for j3), order of robot_joint_names."""
+        return self.data.qpos[self._rq].copy()
+
+    def robot_qvel(self) -> np.ndarray:
+        """Robot joint velocities (rad/s, m/s)."""
+        return self.data.qvel[self._rv].copy()
+
+    def set_servo(self, q: np.ndarray, qd: np.ndarray) -> None:
+        """Servo references: positions (rad, m) and velocity feed-forward (rad/s, m/s)."""
+        ctrl = self.data.ctrl
+        ctrl[self._act_pos] = q
+        ctrl[self._act_vel] = qd
+
+    def set_gripper(self, closed: bool) -> None:
+        """Command the jaws closed or open. Opening releases any held part at once."""
+        closed = bool(closed)
+        self.data.ctrl[self._finger_act] = self._close_ctrl if closed else 0.0
+        if closed and not self._closed:
+            self._grasp_until = self.time + GRASP_WINDOW_S
+            self._steps_to_check = 1
+        if not closed and self._held is not None:
+            self._release(self._held, commanded=True)
+        if not closed:
+            self._grasp_until = -1.0
+        self._closed = closed
+
+    def gripper_holding(self) -> int | None:
+        """Index of the part held by a weld, or None."""
+        return self._held
+
+    def grip_force(self) -> float:
+        """Squeeze on a gripped part, N: the smaller of the two jaw actuator forces."""
+        return float(np.min(np.abs(self.data.actuator_force[self._finger_act])))
+
+    def locations(self) -> dict[str, list[float]]:
+        """Taught locations, V+ form [x, y, z mm, yaw, pitch, roll deg], robot base frame."""
+        return {k: [float(v) for v in loc] for k, loc in self.scene["locations"].items()}
+
+    def robot_base_pose(self) -> np.ndarray:
+        """4x4 world pose of the robot base frame (m)."""
+        return self._base_T.copy()
+
+    def tcp_position(self) -> np.ndarray:
+        """World position of the gripper's TCP site (between the pads), m."""
+        return self.data.site_xpos[self._tcp].copy()
+
+    def part_position(self, i: int) -> np.ndarray:
+        """World position of part i's centre, m."""
+        return self.data.xpos[self._part_body[i]].copy()
+
+    # ------------------------------------------------------------------ stepping
+    def step(self, n: int = 1) -> None:
+        """Advance physics by n steps; feeder/grasp/slip logic runs every check interval
+        (every step while a grasp may engage)."""
+        m, d = self.model, self.data
+        while n > 0:
+            k = min(n, self._steps_to_check)
+            mujoco.mj_step(m, d, k)
+            n -= k
+            self._steps_to_check -= k
+            if self._steps_to_check <= 0:
+                self._housekeeping()
+
+    def _housekeeping(self) -> None:
+        t = self.data.time
+        grasping = self._closed and self._held is None and t <= self._grasp_until
+        if grasping:
+            self._check_grasp()
+        elif self._held is not None and t >= self._held_since + SLIP_GRACE_S:
+            self._check_slip()
+        self._check_feeder(t)
+        self._steps_to_floor -= self._check_steps if not grasping else 1
+        if self._steps_to_floor <= 0:
+            self._steps_to_floor = self._floor_steps
+            self._check_floor()
+        self._steps_to_check = 1 if (self._closed and self._held is None
+                                     and t <= self._grasp_until) else self._check_steps
+
+    # ------------------------------------------------------------------ grasp and slip
+    def _check_grasp(self) -> None:
+        d = self.data
+        ncon = d.ncon
+        if ncon == 0:
+            return
+        g = d.contact.geom[:ncon]
+        dist = d.contact.dist[:ncon]
+        touching = dist <= 0.0
+        pl, pr = self._pads
+        left = touching & ((g[:, 0] == pl) | (g[:, 1] == pl))
+        right = touching & ((g[:, 0] == pr) | (g[:, 1] == pr))
+        if not left.any() or not right.any():
+            return
+        other_l = np.where(g[left, 0] == pl, g[left, 1], g[left, 0])
+        other_r = np.where(g[right, 0] == pr, g[right, 1], g[right, 0])
+        parts_l = set(self._geom_part[other_l].tolist()) - {-1}
+        parts_r = set(self._geom_part[other_r].tolist()) - {-1}
+        both = parts_l & parts_r
+        if both:
+            self._engage(min(both))
+
+    def _engage(self, i: int) -> None:
+        """Weld part i to the palm at their current relative pose."""
+        m, d = self.model, self.data
+        b1, b2 = self._palm, self._part_body[i]
+        p1, p2 = d.xpos[b1], d.xpos[b2]
+        R1 = d.xmat[b1].reshape(3, 3)
+        q1inv = np.zeros(4)
+        mujoco.mju_negQuat(q1inv, d.xquat[b1])
+        relq = np.zeros(4)
+        mujoco.mju_mulQuat(relq, q1inv, d.xquat[b2])
+        eq = self._part_eq[i]
+        m.eq_data[eq, 0:3] = 0.0  # anchor at the part's origin (body2 frame)
+        m.eq_data[eq, 3:6] = R1.T @ (p2 - p1)  # part origin in the palm frame
+        m.eq_data[eq, 6:10] = relq
+        m.eq_data[eq, 10] = 1.0  # torquescale
+        d.eq_active[eq] = 1
+        self._held = i
+        self._held_since = float(d.time)
+        self._events.append({"t": round(float(d.time), 4), "kind": "grasp", "part": int(i),
+                             "where": self.regions.region_of(p2)})
+
+    def _weld_force(self, i: int) -> float:
+        """Norm of the translational constraint force of part i's weld, N."""
+        d = self.data
+        eq = self._part_eq[i]
+        nefc = d.nefc
+        # Equality rows come first in the constraint list; only one weld is ever active.
+        rows = np.flatnonzero((d.efc_type[:min(nefc, 12)] == mujoco.mjtConstraint.mjCNSTR_EQUALITY)
+                              & (d.efc_id[:min(nefc, 12)] == eq))
+        if len(rows) < 3:
+            return 0.0
+        return float(np.linalg.norm(d.efc_force[rows[:3]]))
+
+    def _check_slip(self) -> None:
+        i = self._held
+        capacity = 2.0 * self.grip_mu * self.grip_force()
+        force = self._weld_force(i)
+        if force > capacity:
+            self._events.append({"t": round(self.time, 4), "kind": "slip", "part": int(i),
+                                 "force_n": round(force, 2), "capacity_n": round(capacity, 2)})
+            self._release(i, commanded=False)
+
+    def _release(self, i: int, commanded: bool) -> None:
+        d = self.data
+        d.eq_active[self._part_eq[i]] = 0
+        self._held = None
+        pos = d.xpos[self._part_body[i]]
+        where = self.regions.region_of(pos)
+        if commanded and self.regions.is_place(where):
+            self._events.append({"t": round(float(d.time), 4), "kind": "release", "part": int(i),
+                                 "where": where})
+        else:
+            self._mark_dropped(i, where, "slip" if not commanded else "released outside a place region")
+
+    def _mark_dropped(self, i: int, where: str | None, cause: str) -> None:
+        if self._dropped[i]:
+            return
+        self._dropped[i] = True
+        self._events.append({"t": round(self.time, 4), "kind": "dropped", "part": int(i),
+                             "where": where, "cause": cause})
+
+    # ------------------------------------------------------------------ feeder
+    def _check_feeder(self, t: float) -> None:
+        if len(self._presented_bodies):
+            pts = self.data.xpos[self._presented_bodies]
+            occupied = bool(self.regions.contains("nest", pts).any())
+        else:
+            occupied = False
+        if occupied:
+            self._nest_empty_since = None
+            return
+        if self._nest_empty_since is None:
+            self._nest_empty_since = t
+        elif t >= self._nest_empty_since + self._feeder_delay - 1e-9:
+            self._present()
+
+    def _present(self) -> None:
+        """Move the next pooled part to the nest (zero velocity, contacts on)."""
+        i = len(self._presented)
+        if i >= self._npool:
+            if not self._feeder_exhausted:
+                self._feeder_exhausted = True
+                self._events.append({"t": round(self.time, 4), "kind": "feeder_empty"})
+            self._nest_empty_since = None
+            return
+        m, d = self.model, self.data
+        jx, jy = self._rng.uniform(-1.0, 1.0, 2) * self._jitter_xy
+        jyaw = self._rng.uniform(-1.0, 1.0) * self._jitter_yaw
+        pos = self._nest_top + [jx, jy, self.part_half[2] + 0.0005]
+        qa, da = self._part_qadr[i], self._part_dadr[i]
+        d.qpos[qa:qa + 3] = pos
+        d.qpos[qa + 3:qa + 7] = yaw_quat(self._nest_yaw + jyaw)
+        d.qvel[da:da + 6] = 0.0
+        d.qvel[da + 2] = -1e-9  # a nonzero velocity wakes the (sleeping) parked tree
+        g = self._part_geom[i]
+        m.geom_contype[g] = 1
+        m.geom_conaffinity[g] = 1
+        b = self._part_body[i]
+        m.body_contype[b] = 1  # body-level masks filter the broadphase: set them too
+        m.body_conaffinity[b] = 1
+        m.body_gravcomp[b] = 0.0
+        self._presented.append(i)
+        self._presented_bodies = self._part_body[np.array(self._presented)]
+        self._nest_empty_since = None
+        self._events.append({"t": round(float(d.time), 4), "kind": "present", "part": int(i),
+                             "where": "nest"})
+
+    def _check_floor(self) -> None:
+        if not len(self._presented_bodies):
+            return
+        z = self.data.xpos[self._presented_bodies, 2]
+        low = np.flatnonzero(z < self.table_top_z - 0.02)
+        for k in low:
+            i = self._presented[k]
+            if not self._dropped[i]:
+                self._mark_dropped(i, self.regions.region_of(self.data.xpos[self._part_body[i]]),
+                                   "fell to the floor")
+
+    # ------------------------------------------------------------------ reports
+    @property
+    def events(self) -> list[dict]:
+        """Physics events in time order: present, grasp, release, slip, dropped, feeder_empty.
+
+        Each has ``t`` (s) and ``kind``; ``part`` is a part index, ``where`` a region name.
+        """
+        return self._events
+
+    def parts_report(self) -> list[dict]:
+        """Every part ever presented: id, WORLD pose [x, y, z mm, qw, qx, qy, qz], region, dropped."""
+        self._check_floor()
+        out = []
+        for i in self._presented:
+            b = self._part_body[i]
+            pos = self.data.xpos[b]
+            quat = self.data.xquat[b]
+            out.append({"id": int(i),
+                        "pose": [round(float(v) * MM, 3) for v in pos] + [round(float(v), 6) for v in quat],
+                        "region": self.regions.region_of(pos),
+                        "dropped": bool(self._dropped[i])})
+        return out
+
+    def region_counts(self) -> dict[str, int]:
+        """Presented parts per region; every scene region is listed (0 when empty)."""
+        counts = {name: 0 for name in self.regions.names}
+        for p in self.parts_report():
+            if p["region"] is not None:
+                counts[p["region"]] += 1
+        return counts
