@@ -92,6 +92,13 @@ class Cell:
         self._gp = g.get("prefix", "gripper/")
         spec.attach(gspec, prefix=self._gp, site=spec.site(g.get("site", "flange")))
 
+        # The drives hold the arm's weight: gravity compensation on the robot and gripper bodies
+        # stands in for the servo's integral action / gravity feed-forward (the robot file's
+        # pure P+V servos otherwise sag J3 by ~0.12 mm, beyond the controller's FINE band).
+        for body in spec.bodies:
+            if body.name != "world":
+                body.gravcomp = 1.0
+
         wb = spec.worldbody
         spec.visual.headlight.ambient = [0.4, 0.4, 0.4]
         wb.add_light(name="cell_light", pos=[0.2, 0.2, 2.5], dir=[0, 0, -1], diffuse=[0.6, 0.6, 0.6])
@@ -455,6 +462,8 @@ class Cell:
         m.body_contype[b] = 1  # body-level masks filter the broadphase: set them too
         m.body_conaffinity[b] = 1
         m.body_gravcomp[b] = 0.0
+        d.xpos[b] = pos  # so the checks before the next step see the part where it now is
+        d.xquat[b] = d.qpos[qa + 3:qa + 7]
         self._presented.append(i)
         self._presented_bodies = self._part_body[np.array(self._presented)]
         self._nest_empty_since = None
