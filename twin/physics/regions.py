@@ -34,5 +34,10 @@ class Regions:
         i = self.index(name)
         return np.all((points >= self.lo[i]) & (points <= self.hi[i]), axis=-1)
 
+    def first_index(self, points: np.ndarray) -> np.ndarray:
+        """Per row of ``points`` (N x 3, m): index of the first region containing it, -1 if none."""
+        inside = np.all((points[:, None, :] >= self.lo) & (points[:, None, :] <= self.hi), axis=-1)
+        return np.where(inside.any(axis=1), inside.argmax(axis=1), -1)
+
     def is_place(self, name: str | None) -> bool:
         return name is not None and self.place.get(name, False)
