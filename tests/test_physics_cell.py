@@ -297,3 +297,21 @@ def test_real_time_factor_of_a_cycling_cell():
         assert placed >= 8
         assert not any(p["dropped"] for p in cell.parts_report())
     assert results[True] > 3.0
+
+
+def test_parts_at_rest_in_the_bin_are_retired_and_stay_put(cell: Cell):
+    """Three cycles: each part reaches the bin, comes to rest, is retired (frozen in place)."""
+    drv = Driver(cell)
+    for _ in range(3):
+        drv.wait_for_part()
+        drv.pick()
+        drv.place()
+    drv.wait(3.5)
+    in_bin = [p for p in cell.parts_report() if p["region"] == "bin"]
+    assert len(in_bin) == 3 and not any(p["dropped"] for p in in_bin)
+    ids = [p["id"] for p in in_bin]
+    assert cell._retired[ids].all()
+    before = {i: cell.part_position(i) for i in ids}
+    drv.wait(1.0)
+    for i in ids:
+        assert np.linalg.norm(cell.part_position(i) - before[i]) < 1e-4

@@ -515,8 +515,8 @@ class Cell:
         and the cost grows with the heap (measured: 100 parts -> slower than real time). A
         retired part keeps its rest pose, is gravity compensated and heavily damped, and
         touches only live parts (so new parts still land on the heap), never other retired
-        parts or the bin: the heap costs nothing, and a part landing on it moves it by well
-        under a millimetre.
+        parts or the bin: the heap costs nothing, and parts landing on it move a retired
+        part by about a millimetre at most (measured 1.1 mm over a 40-part heap).
         """
         m, d = self.model, self.data
         g, b, da = self._part_geom[i], self._part_body[i], self._part_dadr[i]
