@@ -1,0 +1,317 @@
+"""Robot kinematics on pinocchio, built from the robot's MJCF.
+
+`RobotKinematics` works in SI (m, rad) and in the robot base frame.  Forward
+kinematics and Jacobians come from pinocchio.  Inverse kinematics:
+
+* SCARA (detected from the model: revolute, revolute, prismatic, revolute, all
+  axes vertical): closed form for the requested arm configuration, with the link
+  lengths and offsets read from the pinocchio model's joint placements, then a
+  Newton refinement on the pinocchio model (normally zero or one step).
+* any other chain (e.g. a Cartesian X/Y/Z/theta gantry): damped least squares
+  on the pinocchio model from the seed.
+
+A robot with 4 joints controls x, y, z and the rotation about the vertical; the
+tool must point along the flange's home orientation's Z (for the Cobra, down):
+a target tilted by more than `TILT_TOLERANCE` is out of range.
+
+V+ errors raised as `KinematicsError` (code, text):
+
+* -610 ``*Location out of range*``: the location cannot be reached (too far,
+  too close to the J1 axis, tool not vertical).  Code and text as the project's
+  table `twin/language/vplus/messages.py` (LOCATION_OUT_OF_RANGE, "(LRG)": the
+  numbered list is not in the seeds).
+* -1021 ``*Joint N limit stop*``: the location is reachable geometrically, but
+  in the requested configuration joint N would be outside its range.  The V+
+  guide uses "limit stop" (v17 L6958-6959, OVERLAP) but prints no message for
+  it: code and text are twin-defined (next free after twin's -1020).
+* -1022 ``*Straight-line motion can't alter configuration*`` (raised by the
+  trajectory planner): text as we remember it from the V+ reference; the code is
+  twin-defined.  Neither is in the seeds.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+LOCATION_OUT_OF_RANGE = -610  # "*Location out of range*" (messages.py, "(LRG)")
+JOINT_LIMIT = -1021  # "*Joint N limit stop*" (twin-defined code and text)
+STRAIGHT_LINE_CONFIG = -1022  # "*Straight-line motion can't alter configuration*" (twin-defined code)
+
+TILT_TOLERANCE = 1e-4  # rad: a 4-axis robot cannot tilt its tool
+POSITION_TOLERANCE = 1e-6  # m: IK must land this close
+LIMIT_EPS = 1e-9  # joint units: slack on the joint limits
+
+
+class KinematicsError(Exception):
+    """A V+ robot error: `.code` (int) and `.message` (the *text*)."""
+
+    def __init__(self, code: int, message: str, joint: int | None = None):
+        super().__init__(message)
+        self.code = code
+        self.message = message
+        self.joint = joint  # 1-based joint number for joint-limit errors
+
+    @classmethod
+    def out_of_range(cls, detail: str = "") -> "KinematicsError":
+        err = cls(LOCATION_OUT_OF_RANGE, "*Location out of range*")
+        err.detail = detail
+        return err
+
+    @classmethod
+    def joint_limit(cls, joint: int) -> "KinematicsError":
+        return cls(JOINT_LIMIT, f"*Joint {joint} limit stop*", joint=joint)
+
+
+def _wrap(a):
+    return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
+
+
+def _branch_nearest(value: float, seed: float, lo: float, hi: float, within: bool = True) -> float:
+    """`value + 2 pi k` nearest `seed`; with `within`, among those inside [lo, hi] when any is."""
+    k0 = round((seed - value) / (2 * math.pi))
+    candidates = [value + 2 * math.pi * k for k in range(k0 - 2, k0 + 3)]
+    if within:
+        inside = [c for c in candidates if lo - LIMIT_EPS <= c <= hi + LIMIT_EPS]
+        if inside:
+            candidates = inside
+    return min(candidates, key=lambda c: abs(c - seed))
+
+
+def _read_numeric(path: Path) -> tuple[str, dict[str, np.ndarray]]:
+    root = ET.parse(path).getroot()
+    model = root.get("model", "")
+    out = {}
+    for node in root.iter("numeric"):
+        name, data = node.get("name"), node.get("data")
+        if name and data:
+            out[name] = np.array([float(v) for v in data.split()])
+    return model, out
+
+
+class _Scara:
+    """Closed-form geometry of a SCARA, read from a pinocchio model at q = 0."""
+
+    def __init__(self, kin: "RobotKinematics"):
+        model, data = kin.model, kin.model.createData()
+        q0 = pin.neutral(model)
+        pin.forwardKinematics(model, data, q0)
+        pin.updateFramePlacements(model, data)
+        pin.computeJointJacobians(model, data, q0)
+        J = pin.getJointJacobian(model, data, 4, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        # World direction of each joint axis at q = 0 (angular part for hinges, linear for the slide).
+        axes = [J[3:, 0], J[3:, 1], J[:3, 2], J[3:, 3]]
+        self.s1, self.s2, self.s4 = (float(np.sign(axes[i][2])) for i in (0, 1, 3))
+        self.a3 = float(axes[2][2])  # dz of the J4 origin per unit of J3
+        o = [data.oMi[i].translation.copy() for i in range(5)]
+        self.p1 = o[1][:2]
+        d12, d24 = o[2][:2] - o[1][:2], o[4][:2] - o[2][:2]
+        self.l1, self.l2 = float(np.hypot(*d12)), float(np.hypot(*d24))
+        self.alpha1 = math.atan2(d12[1], d12[0])  # world angle of link 1 at q = 0
+        self.beta = math.atan2(d24[1], d24[0])  # world angle of link 2 at q = 0
+        self.z4 = float(o[4][2])
+        self.R4 = data.oMi[4].rotation.copy()
+        self.M4f_inv = (data.oMi[4].inverse() * data.oMf[kin.frame_id]).inverse().homogeneous
+        self.flange_in_j4 = (data.oMi[4].inverse() * data.oMf[kin.frame_id]).translation.copy()
+
+    def elbow(self, q2) -> np.ndarray:
+        """Angle from link 1 to link 2 (world, seen from above)."""
+        return _wrap(self.beta - self.alpha1 + self.s2 * np.asarray(q2))
+
+    @staticmethod
+    def valid(model: pin.Model) -> bool:
+        if model.nq != 4 or model.nv != 4:
+            return False
+        data = model.createData()
+        q0 = pin.neutral(model)
+        pin.computeJointJacobians(model, data, q0)
+        J = pin.getJointJacobian(model, data, 4, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        ez = np.array([0.0, 0.0, 1.0])
+        for i, kind in enumerate("RRPR"):
+            lin, ang = J[:3, i], J[3:, i]
+            if kind == "R" and not (abs(abs(ang @ ez) - 1) < 1e-9):
+                return False
+            if kind == "P" and not (np.linalg.norm(ang) < 1e-12 and abs(abs(lin @ ez) - 1) < 1e-9):
+                return False
+        return True
+
+
+class RobotKinematics:
+    """Kinematics of one robot (SI units, robot base frame)."""
+
+    def __init__(self, model: pin.Model, flange_frame: str, max_velocity, max_acceleration, name: str = ""):
+        self.model = model
+        self.data = model.createData()
+        self.name = name
+        if not model.existFrame(flange_frame):
+            raise ValueError(f"no frame {flange_frame!r} in the model")
+        self.frame_id = model.getFrameId(flange_frame)
+        self.joint_names: list[str] = [model.names[i] for i in range(1, model.njoints)]
+        self.lower = np.array(model.lowerPositionLimit, dtype=float)
+        self.upper = np.array(model.upperPositionLimit, dtype=float)
+        self.max_velocity = np.asarray(max_velocity, dtype=float)
+        self.max_acceleration = np.asarray(max_acceleration, dtype=float)
+        if self.max_velocity.shape != (model.nv,) or self.max_acceleration.shape != (model.nv,):
+            raise ValueError("max_velocity/max_acceleration need one value per joint")
+        self.revolute = np.array([model.joints[i].shortname().startswith(("JointModelR", "JointModelRevolute"))
+                                  for i in range(1, model.njoints)])
+        self.scara = _Scara(self) if _Scara.valid(model) else None
+        # Task rows of the 6-D frame velocity (LOCAL_WORLD_ALIGNED): x, y, z, wz for 4 joints.
+        self._rows = np.array([0, 1, 2, 5]) if model.nv == 4 else np.arange(6)
+        q0 = pin.neutral(model)
+        self._home_rotation = self.fk(q0)[:3, :3].copy()
+
+    @classmethod
+    def from_mjcf(cls, path: str | Path, flange_site: str = "flange") -> "RobotKinematics":
+        """Pinocchio model from the MJCF (robot = first top-level body); joint speed and
+        acceleration limits from the `<numeric>` entries `<model>/max_velocity` and
+        `<model>/max_acceleration` (pinocchio does not read them)."""
+        path = Path(path)
+        model = pin.buildModelFromMJCF(str(path))
+        name, numeric = _read_numeric(path)
+        try:
+            vmax = numeric[f"{name}/max_velocity"]
+            amax = numeric[f"{name}/max_acceleration"]
+        except KeyError as missing:
+            raise ValueError(f"{path}: no <numeric name={missing}> (joint limits for the planner)") from None
+        return cls(model, flange_site, vmax, amax, name)
+
+    # ------------------------------------------------------------ forward
+    @property
+    def dof(self) -> int:
+        return self.model.nv
+
+    def fk(self, q: np.ndarray) -> np.ndarray:
+        """4x4 flange pose in the robot base frame, translation in metres."""
+        pin.forwardKinematics(self.model, self.data, np.asarray(q, dtype=float))
+        return pin.updateFramePlacement(self.model, self.data, self.frame_id).homogeneous
+
+    def fk_positions(self, Q: np.ndarray) -> np.ndarray:
+        """Flange positions (n x 3, m) for joint vectors Q (n x dof); vectorised for a SCARA."""
+        Q = np.atleast_2d(np.asarray(Q, dtype=float))
+        s = self.scara
+        if s is None:
+            return np.array([self.fk(q)[:3, 3] for q in Q])
+        t1 = s.alpha1 + s.s1 * Q[:, 0]
+        t2 = s.beta + s.s1 * Q[:, 0] + s.s2 * Q[:, 1]
+        psi = s.s1 * Q[:, 0] + s.s2 * Q[:, 1] + s.s4 * Q[:, 3]
+        out = np.empty((len(Q), 3))
+        # Flange offset from the J4 origin, turned with the J4 frame about the vertical.
+        r = s.R4 @ s.flange_in_j4
+        c, si = np.cos(psi), np.sin(psi)
+        out[:, 0] = s.p1[0] + s.l1 * np.cos(t1) + s.l2 * np.cos(t2) + c * r[0] - si * r[1]
+        out[:, 1] = s.p1[1] + s.l1 * np.sin(t1) + s.l2 * np.sin(t2) + si * r[0] + c * r[1]
+        out[:, 2] = s.z4 + s.a3 * Q[:, 2] + r[2]
+        return out
+
+    def jacobian(self, q: np.ndarray) -> np.ndarray:
+        """6 x dof Jacobian of the flange: rows vx, vy, vz (flange origin) and wx, wy, wz,
+        all in the base frame axes (pinocchio LOCAL_WORLD_ALIGNED)."""
+        q = np.asarray(q, dtype=float)
+        return pin.computeFrameJacobian(self.model, self.data, q, self.frame_id,
+                                        pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+
+    def is_righty(self, q: np.ndarray) -> bool:
+        """SCARA arm configuration: RIGHTY when the elbow turns link 2 counter-clockwise
+        from link 1 seen from above (for the Cobra model: J2 > 0; the stretched arm, J2 = 0,
+        counts as RIGHTY).  Robots without an elbow configuration report True."""
+        if self.scara is None:
+            return True
+        return bool(self.scara.elbow(q[1]) >= 0.0)
+
+    def within_limits(self, q: np.ndarray) -> bool:
+        return bool(np.all(q >= self.lower - LIMIT_EPS) and np.all(q <= self.upper + LIMIT_EPS))
+
+    def check_limits(self, q: np.ndarray) -> None:
+        bad = np.nonzero((q < self.lower - LIMIT_EPS) | (q > self.upper + LIMIT_EPS))[0]
+        if len(bad):
+            raise KinematicsError.joint_limit(int(bad[0]) + 1)
+
+    # ------------------------------------------------------------ inverse
+    def _tilt_ok(self, R: np.ndarray) -> bool:
+        """For 4 joints the tool Z must stay parallel to the flange's home Z."""
+        if self.model.nv != 4:
+            return True
+        z_home = self._home_rotation[:, 2]
+        return float(R[:, 2] @ z_home) >= math.cos(TILT_TOLERANCE)
+
+    def ik(self, T: np.ndarray, q_seed: np.ndarray, righty: bool | None = None, *,
+           continuous: bool = False) -> np.ndarray:
+        """Joint vector (SI) putting the flange at `T` (4x4, metres, base frame).
+
+        `righty`: the SCARA arm configuration (None keeps the seed's).  Revolute joints
+        that can turn more than one way (J4 multi-turn, J1 if its range allows) take the
+        solution nearest the seed within the limits; with `continuous` (straight-line
+        motion), the nearest solution is taken and a joint limit is an error.
+        Raises KinematicsError (-610 out of range, -1021 joint limit)."""
+        T = np.asarray(T, dtype=float)
+        q_seed = np.asarray(q_seed, dtype=float)
+        if not self._tilt_ok(T[:3, :3]):
+            raise KinematicsError.out_of_range("tool not vertical")
+        if self.scara is not None:
+            q = self._scara_ik(T, q_seed, self.is_righty(q_seed) if righty is None else righty, continuous)
+        else:
+            q = q_seed.copy()
+        q = self._refine(T, q)
+        self.check_limits(q)
+        return q
+
+    def _scara_ik(self, T, seed, righty: bool, continuous: bool) -> np.ndarray:
+        s = self.scara
+        T4 = T @ s.M4f_inv
+        P = T4[:3, 3]
+        Rrel = T4[:3, :3] @ s.R4.T
+        psi = math.atan2(Rrel[1, 0], Rrel[0, 0])
+        dx, dy = P[0] - s.p1[0], P[1] - s.p1[1]
+        r2 = dx * dx + dy * dy
+        c = (r2 - s.l1 ** 2 - s.l2 ** 2) / (2 * s.l1 * s.l2)
+        if c > 1 + 1e-12:
+            raise KinematicsError.out_of_range("beyond the reach of the arm")
+        if c < -1 - 1e-12:
+            raise KinematicsError.out_of_range("too close to the J1 axis")
+        gamma = math.acos(min(1.0, max(-1.0, c)))
+        if not righty:
+            gamma = -gamma
+        theta1 = math.atan2(dy, dx) - math.atan2(s.l2 * math.sin(gamma), s.l1 + s.l2 * math.cos(gamma))
+        q1 = s.s1 * (theta1 - s.alpha1)
+        q2 = s.s2 * (gamma - (s.beta - s.alpha1))
+        q3 = (P[2] - s.z4) / s.a3
+        lo, hi = self.lower, self.upper
+        within = not continuous
+        q1 = _branch_nearest(q1, seed[0], lo[0], hi[0], within)
+        q2 = _branch_nearest(q2, 0.0, lo[1], hi[1], True)  # the elbow angle is not multi-turn
+        q4 = s.s4 * (psi - s.s1 * q1 - s.s2 * q2)
+        q4 = _branch_nearest(q4, seed[3], lo[3], hi[3], within)
+        return np.array([q1, q2, q3, q4])
+
+    def _task_error(self, T: np.ndarray, M: pin.SE3) -> np.ndarray:
+        e = np.empty(6)
+        e[:3] = T[:3, 3] - M.translation
+        e[3:] = pin.log3(T[:3, :3] @ M.rotation.T)
+        return e[self._rows]
+
+    def _refine(self, T: np.ndarray, q: np.ndarray, iterations: int = 50) -> np.ndarray:
+        """Newton / damped least squares on the pinocchio model, in the task rows."""
+        model, data, fid = self.model, self.data, self.frame_id
+        q = q.copy()
+        for _ in range(iterations):
+            pin.forwardKinematics(model, data, q)
+            M = pin.updateFramePlacement(model, data, fid)
+            e = self._task_error(T, M)
+            if np.linalg.norm(e[:3]) < 1e-10 and np.all(np.abs(e[3:]) < 1e-10):
+                return q
+            J = pin.computeFrameJacobian(model, data, q, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)[self._rows]
+            lam = 1e-10 if self.scara is not None else 1e-6
+            dq = J.T @ np.linalg.solve(J @ J.T + lam * np.eye(len(e)), e)
+            q = q + dq
+            if self.scara is None:
+                q = np.clip(q, self.lower, self.upper)
+        pin.forwardKinematics(model, data, q)
+        M = pin.updateFramePlacement(model, data, fid)
+        if np.linalg.norm(T[:3, 3] - M.translation) > POSITION_TOLERANCE:
+            raise KinematicsError.out_of_range("no converged solution")
+        return q

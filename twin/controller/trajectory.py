@@ -1,0 +1,253 @@
+"""Time-optimal trajectories (toppra) for V+ joint and straight-line motions.
+
+All toppra use lives in this module (its README warns Python support may go).
+A path is a cubic spline through joint waypoints, parametrised by s in [0, 1];
+toppra (Seidel solver, `N_GRID` grid points, constant-acceleration
+parametrizer) gives the time-optimal s(t) within the joint velocity and
+acceleration limits.  `Trajectory` keeps only numpy/scipy data: the
+piecewise-constant path acceleration that `ParametrizeConstAccel` uses, and the
+spline, so sampling a whole move is a few vectorised numpy calls.
+
+* `plan_joint_move` (MOVE, APPRO, DEPART): straight line in joint space.
+* `plan_straight_move` (MOVES, APPROS, DEPARTS): the flange origin on the
+  straight line from fk(q0) to T1, orientation by slerp, sampled into joint
+  waypoints with `RobotKinematics.ik` (each seeded by the previous one, the
+  arm configuration held), the spacing refined until the spline's flange path
+  stays within `LINE_TOLERANCE` of the line.  The TCP speed limit is a toppra
+  velocity limit on an extra path coordinate equal to the distance travelled.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pinocchio as pin
+import toppra as ta
+import toppra.algorithm as algo
+import toppra.constraint as constraint
+from scipy.interpolate import CubicSpline
+
+from .kinematics import STRAIGHT_LINE_CONFIG, KinematicsError, RobotKinematics
+
+ta.setup_logging("WARNING")
+
+N_GRID = 100  # toppra grid points
+LINE_TOLERANCE = 0.05e-3  # m: target deviation of a straight-line motion (the contract is 0.1 mm)
+WAYPOINT_SPACING = 0.010  # m: first try of the straight-line waypoint spacing
+WAYPOINT_ANGLE = math.radians(5.0)  # rad: same, for the orientation
+MAX_REFINEMENTS = 5
+CART_ACCEL_UNLIMITED = 1e3  # m/s^2 on the distance coordinate: no Cartesian acceleration limit
+
+
+@dataclass
+class Trajectory:
+    """A planned motion: joint positions and velocities as functions of time (SI).
+
+    `duration` is 0 for a motion that goes nowhere."""
+
+    duration: float
+    q_start: np.ndarray
+    q_end: np.ndarray
+    _t: np.ndarray = field(repr=False)  # knot times (m + 1)
+    _s: np.ndarray = field(repr=False)  # path parameter at the knots
+    _v: np.ndarray = field(repr=False)  # ds/dt at the knots
+    _a: np.ndarray = field(repr=False)  # d2s/dt2 on each segment (m), constant
+    _path: CubicSpline | None = field(default=None, repr=False)  # s -> q
+    _dpath: CubicSpline | None = field(default=None, repr=False)  # s -> dq/ds
+
+    @classmethod
+    def still(cls, q: np.ndarray) -> "Trajectory":
+        q = np.array(q, dtype=float)
+        z = np.zeros(1)
+        return cls(0.0, q, q.copy(), z, z, z, np.zeros(0))
+
+    def _eval(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        n = len(times)
+        if self.duration <= 0.0 or self._path is None:
+            return np.repeat(self.q_start[None, :], n, axis=0), np.zeros((n, len(self.q_start)))
+        t = np.clip(times, 0.0, self.duration)
+        i = np.clip(np.searchsorted(self._t, t, side="right") - 1, 0, len(self._a) - 1)
+        tau = t - self._t[i]
+        s = np.clip(self._s[i] + self._v[i] * tau + 0.5 * self._a[i] * tau * tau, 0.0, self._s[-1])
+        sd = np.maximum(self._v[i] + self._a[i] * tau, 0.0)
+        q = self._path(s)
+        qd = self._dpath(s) * sd[:, None]
+        end = t >= self.duration
+        q[end] = self.q_end
+        qd[end] = 0.0
+        return q, qd
+
+    def sample(self, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Times k*dt (k = 0, 1, ...) before the end, then the end itself; q and qd (n x dof)
+        there.  The last sample is exactly `q_end` at rest."""
+        if dt <= 0:
+            raise ValueError("dt must be positive")
+        k = int(math.ceil(self.duration / dt - 1e-9))
+        times = np.arange(k + 1, dtype=float) * dt
+        times[-1] = self.duration
+        q, qd = self._eval(times)
+        return times, q, qd
+
+    def at(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """q, qd at time t (clamped to [0, duration])."""
+        q, qd = self._eval(np.array([float(t)]))
+        return q[0], qd[0]
+
+
+# ---------------------------------------------------------------- toppra
+def _parametrize(ss: np.ndarray, waypoints: np.ndarray, vmax: np.ndarray, amax: np.ndarray):
+    """Time-optimal rest-to-rest s(t) along the spline through `waypoints`: (t, s, v, a)."""
+    path = ta.SplineInterpolator(ss, waypoints)
+    vel = constraint.JointVelocityConstraint(np.column_stack([-vmax, vmax]))
+    acc = constraint.JointAccelerationConstraint(
+        np.column_stack([-amax, amax]), discretization_scheme=constraint.DiscretizationType.Interpolation
+    )
+    grid = np.linspace(ss[0], ss[-1], N_GRID)
+    if len(ss) > 2:  # also put grid points on the waypoints, where the spline's curvature changes
+        grid = np.unique(np.concatenate([grid, ss]))
+    instance = algo.TOPPRA([vel, acc], path, gridpoints=grid, solver_wrapper="seidel",
+                           parametrizer="ParametrizeConstAccel")
+    out = instance.compute_trajectory(0.0, 0.0)
+    if out is None:
+        raise KinematicsError.out_of_range("no feasible time parametrisation")
+    return out._ts, out._ss, out._velocities, out._us
+
+
+def _trajectory(ss, waypoints_q, waypoints_all, vmax, amax) -> Trajectory:
+    t, s, v, a = _parametrize(ss, waypoints_all, vmax, amax)
+    path = CubicSpline(ss, waypoints_q) if len(ss) > 2 else _Line(waypoints_q[0], waypoints_q[-1])
+    dpath = path.derivative()
+    q0, q1 = np.array(waypoints_q[0], dtype=float), np.array(waypoints_q[-1], dtype=float)
+    return Trajectory(float(t[-1]), q0, q1, np.asarray(t, float), np.asarray(s, float), np.asarray(v, float),
+                      np.asarray(a, float), path, dpath)
+
+
+class _Line:
+    """q0 + s (q1 - q0), s in [0, 1], with the CubicSpline calling interface."""
+
+    def __init__(self, q0, q1, derivative: bool = False):
+        self.q0, self.dq, self.d = np.asarray(q0, float), np.asarray(q1, float) - np.asarray(q0, float), derivative
+
+    def __call__(self, s):
+        s = np.asarray(s, dtype=float)
+        if self.d:
+            return np.broadcast_to(self.dq, s.shape + self.dq.shape).copy()
+        return self.q0 + s[..., None] * self.dq
+
+    def derivative(self):
+        return _Line(self.q0, self.q0 + self.dq, derivative=True)
+
+
+# ---------------------------------------------------------------- analytic check
+def joint_move_time(q0, q1, vmax, amax) -> float:
+    """Time of the time-optimal rest-to-rest straight line in joint space (trapezoid or
+    triangle on the path parameter, the slowest joint deciding): the analytic answer that
+    `plan_joint_move` approximates."""
+    dq = np.abs(np.asarray(q1, float) - np.asarray(q0, float))
+    moving = dq > 0
+    if not moving.any():
+        return 0.0
+    v = float(np.min(np.asarray(vmax, float)[moving] / dq[moving]))  # ds/dt limit, s in [0, 1]
+    a = float(np.min(np.asarray(amax, float)[moving] / dq[moving]))
+    if v * v / a >= 1.0:
+        return 2.0 * math.sqrt(1.0 / a)
+    return 1.0 / v + v / a
+
+
+# ---------------------------------------------------------------- planners
+def plan_joint_move(q0, q1, vmax, amax) -> Trajectory:
+    """MOVE / APPRO / DEPART: straight line from q0 to q1 in joint space, rest to rest,
+    time-optimal within the per-joint |qd| <= vmax and |qdd| <= amax."""
+    q0 = np.array(q0, dtype=float)
+    q1 = np.array(q1, dtype=float)
+    if np.max(np.abs(q1 - q0), initial=0.0) < 1e-12:
+        return Trajectory.still(q0)
+    vmax = np.asarray(vmax, float)
+    amax = np.asarray(amax, float)
+    ss = np.array([0.0, 1.0])
+    W = np.vstack([q0, q1])
+    return _trajectory(ss, W, W, vmax, amax)
+
+
+def _segment_clear_of_hole(kin: RobotKinematics, P0: np.ndarray, P1: np.ndarray) -> None:
+    """A SCARA cannot put its J4 axis nearer the J1 axis than |L1 - L2|: the straight line
+    must not cross that disc (waypoints on both sides would not show it)."""
+    s = kin.scara
+    r_min = abs(s.l1 - s.l2)
+    a, b = P0[:2] - s.p1, P1[:2] - s.p1
+    d = b - a
+    dd = float(d @ d)
+    u = 0.0 if dd == 0.0 else min(1.0, max(0.0, -float(a @ d) / dd))
+    if np.linalg.norm(a + u * d) < r_min - 1e-9:
+        raise KinematicsError.out_of_range("straight line passes too close to the J1 axis")
+
+
+def _distance_to_segment(P: np.ndarray, p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
+    d = p1 - p0
+    dd = float(d @ d)
+    if dd == 0.0:
+        return np.linalg.norm(P - p0, axis=1)
+    u = np.clip((P - p0) @ d / dd, 0.0, 1.0)
+    return np.linalg.norm(P - (p0 + u[:, None] * d), axis=1)
+
+
+def plan_straight_move(kin: RobotKinematics, q0, T1, vmax, amax, cart_speed_max, righty=None) -> Trajectory:
+    """MOVES / APPROS / DEPARTS: the flange origin on the straight line from fk(q0) to T1
+    (metres, base frame), orientation by slerp, arm configuration held.
+
+    Limits: joint |qd| <= vmax, |qdd| <= amax, and the flange's linear speed
+    <= cart_speed_max (m/s).  Raises KinematicsError: -1022 when `righty` asks for a
+    configuration change, -610 when the line leaves the workspace, -1021 when a joint
+    would pass its limit on the way."""
+    q0 = np.array(q0, dtype=float)
+    T1 = np.asarray(T1, dtype=float)
+    vmax = np.asarray(vmax, float)
+    amax = np.asarray(amax, float)
+    config = kin.is_righty(q0)
+    if righty is not None and kin.scara is not None and bool(righty) != config:
+        raise KinematicsError(STRAIGHT_LINE_CONFIG, "*Straight-line motion can't alter configuration*")
+    T0 = kin.fk(q0).copy()
+    p0, p1 = T0[:3, 3].copy(), T1[:3, 3].copy()
+    R0 = T0[:3, :3].copy()
+    length = float(np.linalg.norm(p1 - p0))
+    rotvec = pin.log3(R0.T @ T1[:3, :3])
+    if kin.dof == 4:  # only the rotation about the vertical can be followed; a tilt is an error in ik
+        rotvec = np.array([0.0, 0.0, rotvec[2]]) if kin._tilt_ok(T1[:3, :3]) else rotvec
+    angle = float(np.linalg.norm(rotvec))
+    # The end point first: an unreachable target is reported as such.
+    kin.ik(T1, q0, righty=config)
+    if length < 1e-9 and angle < 1e-9:
+        return Trajectory.still(q0)
+    if kin.scara is not None:
+        s = kin.scara
+        _segment_clear_of_hole(kin, (T0 @ s.M4f_inv)[:3, 3], (T1 @ s.M4f_inv)[:3, 3])
+
+    n = max(2, int(math.ceil(length / WAYPOINT_SPACING)), int(math.ceil(angle / WAYPOINT_ANGLE))) + 1
+    for attempt in range(MAX_REFINEMENTS + 1):
+        ss = np.linspace(0.0, 1.0, n)
+        Q = np.empty((n, kin.dof))
+        Q[0] = q0
+        T = np.eye(4)
+        for i in range(1, n):
+            T[:3, :3] = R0 @ pin.exp3(ss[i] * rotvec)
+            T[:3, 3] = p0 + ss[i] * (p1 - p0)
+            if i == n - 1:
+                T = T1
+            Q[i] = kin.ik(T, Q[i - 1], righty=config, continuous=True)
+        # Deviation of the spline's flange path from the line, between the waypoints.
+        spline = CubicSpline(ss, Q)
+        probe = np.concatenate([(ss[:-1] + ss[1:]) / 2, ss[:-1] + (ss[1:] - ss[:-1]) / 4,
+                                ss[:-1] + 3 * (ss[1:] - ss[:-1]) / 4])
+        deviation = float(np.max(_distance_to_segment(kin.fk_positions(spline(probe)), p0, p1)))
+        if deviation <= LINE_TOLERANCE:
+            break
+        n = 2 * n - 1
+    else:
+        raise KinematicsError.out_of_range(f"straight line not followed (deviation {deviation * 1e3:.3f} mm)")
+    # Extra path coordinate: distance travelled (m), limited to cart_speed_max.
+    W = np.column_stack([Q, length * ss])
+    v_all = np.append(vmax, cart_speed_max if length > 0 else 1.0)
+    a_all = np.append(amax, CART_ACCEL_UNLIMITED)
+    return _trajectory(ss, Q, W, v_all, a_all)
