@@ -73,13 +73,14 @@ def _wrap(a):
 
 def _branch_nearest(value: float, seed: float, lo: float, hi: float, within: bool = True) -> float:
     """`value + 2 pi k` nearest `seed`; with `within`, among those inside [lo, hi] when any is."""
-    k0 = round((seed - value) / (2 * math.pi))
-    candidates = [value + 2 * math.pi * k for k in range(k0 - 2, k0 + 3)]
-    if within:
-        inside = [c for c in candidates if lo - LIMIT_EPS <= c <= hi + LIMIT_EPS]
-        if inside:
-            candidates = inside
-    return min(candidates, key=lambda c: abs(c - seed))
+    two_pi = 2 * math.pi
+    nearest = value + two_pi * round((seed - value) / two_pi)
+    if not within or lo - LIMIT_EPS <= nearest <= hi + LIMIT_EPS:
+        return nearest
+    k_lo = math.ceil((lo - LIMIT_EPS - value) / two_pi)
+    k_hi = math.floor((hi + LIMIT_EPS - value) / two_pi)
+    inside = [value + two_pi * k for k in range(k_lo, k_hi + 1)]
+    return min(inside, key=lambda c: abs(c - seed)) if inside else nearest
 
 
 def _read_numeric(path: Path) -> tuple[str, dict[str, np.ndarray]]:

@@ -1,0 +1,166 @@
+"""Robot kinematics (twin.controller.kinematics) on the Cobra s600 model."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pytest
+
+from twin.controller.kinematics import (
+    JOINT_LIMIT,
+    LOCATION_OUT_OF_RANGE,
+    KinematicsError,
+    RobotKinematics,
+)
+from twin.controller.location import Location
+
+ROBOT = Path(__file__).resolve().parents[1] / "models" / "robots" / "cobra_s600.xml"
+
+
+@pytest.fixture(scope="module")
+def kin() -> RobotKinematics:
+    return RobotKinematics.from_mjcf(ROBOT)
+
+
+def _pose(x, y, z, roll):
+    """Flange pose (m) of a tool-down SCARA location (x, y, z mm, 0, 180, roll)."""
+    T = Location(x * 1e3, y * 1e3, z * 1e3, 0, 180, roll).matrix()
+    T[:3, 3] /= 1e3
+    return T
+
+
+def test_model_data_read_from_the_mjcf(kin):
+    assert kin.joint_names == ["j1", "j2", "j3", "j4"]
+    assert np.allclose(kin.lower, [-1.8326, -2.618, 0, -6.2832])
+    assert np.allclose(kin.upper, [1.8326, 2.618, 0.21, 6.2832])
+    assert np.allclose(kin.max_velocity, [6.737, 12.566, 1.1, 20.944])
+    assert np.allclose(kin.max_acceleration, [38, 70, 14, 110])
+    s = kin.scara
+    assert s is not None and s.l1 == pytest.approx(0.325) and s.l2 == pytest.approx(0.275)
+
+
+def test_fk_matches_mujoco_site(kin):
+    model = mujoco.MjModel.from_xml_path(str(ROBOT))
+    data = mujoco.MjData(model)
+    adr = [model.joint(n).qposadr[0] for n in kin.joint_names]
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        q = rng.uniform(kin.lower, kin.upper)
+        data.qpos[adr] = q
+        mujoco.mj_kinematics(model, data)
+        T = kin.fk(q)
+        assert np.allclose(T[:3, 3], data.site("flange").xpos, atol=1e-12)
+        assert np.allclose(T[:3, :3], data.site("flange").xmat.reshape(3, 3), atol=1e-12)
+        assert np.allclose(kin.fk_positions(q)[0], T[:3, 3], atol=1e-12)
+        # The Cobra's tool points down: V+ reads pitch 180 and yaw 0 everywhere.
+        loc = Location.from_matrix(T)
+        assert loc.pitch == 180.0 and loc.yaw == 0.0
+
+
+def test_jacobian_is_the_derivative_of_fk(kin):
+    q = np.array([0.3, 1.1, 0.07, -0.4])
+    J = kin.jacobian(q)
+    h = 1e-7
+    for i in range(4):
+        dq = np.zeros(4)
+        dq[i] = h
+        dp = (kin.fk(q + dq)[:3, 3] - kin.fk(q - dq)[:3, 3]) / (2 * h)
+        assert np.allclose(J[:3, i], dp, atol=1e-6)
+
+
+@pytest.mark.parametrize("righty", [True, False])
+def test_ik_round_trip_over_the_workspace(kin, righty):
+    """A grid over the whole reachable annulus, all heights, several rolls: FK(IK(T)) = T
+    within 0.01 mm, in the configuration asked for."""
+    s = kin.scara
+    r_in, r_out = abs(s.l1 - s.l2), s.l1 + s.l2
+    seed = np.array([0.0, 0.5 if righty else -0.5, 0.1, 0.0])
+    reached = 0
+    for x in np.linspace(-0.6, 0.6, 25):
+        for y in np.linspace(-0.6, 0.6, 25):
+            r = np.hypot(x, y)
+            if not (r_in + 1e-3 < r < r_out - 1e-3):
+                continue
+            for z, roll in ((0.34, 0.0), (0.24, 135.0), (0.131, -60.0)):
+                T = _pose(x, y, z, roll)
+                # Independent textbook oracle: is it inside J1 +/-105 deg, J2 +/-150 deg?
+                c = (r * r - 0.325**2 - 0.275**2) / (2 * 0.325 * 0.275)
+                q2 = np.arccos(np.clip(c, -1, 1)) * (1 if righty else -1)
+                q1 = np.arctan2(y, x) - np.arctan2(0.275 * np.sin(q2), 0.325 + 0.275 * np.cos(q2))
+                q1 = (q1 + np.pi) % (2 * np.pi) - np.pi
+                feasible = abs(q1) <= kin.upper[0] and abs(q2) <= kin.upper[1]
+                try:
+                    q = kin.ik(T, seed, righty=righty)
+                except KinematicsError as err:
+                    assert err.code == JOINT_LIMIT and not feasible
+                    continue
+                assert feasible
+                assert kin.is_righty(q) == righty
+                assert np.all(q >= kin.lower - 1e-9) and np.all(q <= kin.upper + 1e-9)
+                Tq = kin.fk(q)
+                assert np.linalg.norm(Tq[:3, 3] - T[:3, 3]) < 1e-5
+                assert np.allclose(Tq[:3, :3], T[:3, :3], atol=1e-9)
+                reached += 1
+    assert reached > 600
+
+
+def test_ik_recovers_random_joint_vectors(kin):
+    rng = np.random.default_rng(5)
+    for _ in range(300):
+        q = rng.uniform(kin.lower, kin.upper)
+        q[1] = np.sign(q[1]) * max(abs(q[1]), 0.05)  # keep clear of the stretched arm
+        got = kin.ik(kin.fk(q), q + rng.normal(0, 0.2, 4), righty=kin.is_righty(q))
+        # J4 is multi-turn (+/-360 deg): the seed picks the turn; everything else is unique.
+        assert np.allclose(got, q, atol=1e-9)
+
+
+def test_configuration_is_honoured_and_none_keeps_the_seeds(kin):
+    T = _pose(0.35, 0.2, 0.3, 20)
+    qr = kin.ik(T, np.zeros(4), righty=True)
+    ql = kin.ik(T, np.zeros(4), righty=False)
+    assert qr[1] > 0 and ql[1] < 0  # the model: J2 > 0 is RIGHTY
+    assert np.allclose(kin.fk(qr), kin.fk(ql), atol=1e-9)
+    assert kin.ik(T, ql, righty=None)[1] < 0
+    assert kin.ik(T, qr, righty=None)[1] > 0
+
+
+def test_j4_takes_the_turn_nearest_the_seed(kin):
+    T = _pose(0.4, 0.0, 0.3, 10)
+    q_a = kin.ik(T, np.array([0, 0.5, 0.1, 0.0]), righty=True)
+    q_b = kin.ik(T, np.array([0, 0.5, 0.1, 2 * np.pi]), righty=True)
+    assert q_b[3] - q_a[3] == pytest.approx(2 * np.pi)
+    q_c = kin.ik(T, np.array([0, 0.5, 0.1, 100.0]), righty=True)  # far outside: stay within the limits
+    assert kin.lower[3] <= q_c[3] <= kin.upper[3]
+
+
+@pytest.mark.parametrize(
+    "x,y,why",
+    [(0.7, 0.0, "too far"), (0.0, 0.02, "inside the |L1-L2| hole")],
+)
+def test_out_of_reach_is_location_out_of_range(kin, x, y, why):
+    with pytest.raises(KinematicsError) as info:
+        kin.ik(_pose(x, y, 0.3, 0), np.zeros(4), righty=True)
+    assert info.value.code == LOCATION_OUT_OF_RANGE == -610
+    assert info.value.message == "*Location out of range*"
+
+
+def test_tilted_tool_is_out_of_range_for_a_four_axis_scara(kin):
+    T = Location(400, 0, 300, 0, 170, 0).matrix()  # pitch must be 180 (V+ guide v17 L6044-6045)
+    T[:3, 3] /= 1e3
+    with pytest.raises(KinematicsError) as info:
+        kin.ik(T, np.zeros(4))
+    assert info.value.code == LOCATION_OUT_OF_RANGE
+
+
+def test_joint_limits_are_reported_with_the_joint(kin):
+    # Behind the robot: J1 would need more than 105 deg in this configuration.
+    with pytest.raises(KinematicsError) as info:
+        kin.ik(_pose(-0.45, 0.05, 0.3, 0), np.zeros(4), righty=True)
+    assert info.value.code == JOINT_LIMIT and info.value.joint == 1
+    assert info.value.message == "*Joint 1 limit stop*"
+    # Below the J3 stroke.
+    with pytest.raises(KinematicsError) as info:
+        kin.ik(_pose(0.4, 0.1, 0.05, 0), np.zeros(4), righty=True)
+    assert info.value.joint == 3
