@@ -171,16 +171,22 @@ def plan_joint_move(q0, q1, vmax, amax) -> Trajectory:
     return _trajectory(ss, W, W, vmax, amax)
 
 
-def _segment_clear_of_hole(kin: RobotKinematics, P0: np.ndarray, P1: np.ndarray) -> None:
-    """A SCARA cannot put its J4 axis nearer the J1 axis than |L1 - L2|: the straight line
-    must not cross that disc (waypoints on both sides would not show it)."""
+def _segment_clear_of_hole(kin: RobotKinematics, P0: np.ndarray, P1: np.ndarray, righty: bool) -> None:
+    """A SCARA cannot put its J4 axis nearer the J1 axis than the elbow allows: |L1 - L2|
+    geometrically, more where the J2 range stops the elbow folding.  A straight line must
+    not cross that disc (its end points can both lie outside it)."""
     s = kin.scara
-    r_min = abs(s.l1 - s.l2)
+    g = sorted(float(s.beta - s.alpha1 + s.s2 * lim) for lim in (kin.lower[1], kin.upper[1]))
+    g = [min(max(v, 0.0), math.pi) for v in g] if righty else [min(max(v, -math.pi), 0.0) for v in g]
+    fold = min(math.pi, max(abs(v) for v in g))
+    r_min = math.sqrt(max(s.l1 ** 2 + s.l2 ** 2 + 2 * s.l1 * s.l2 * math.cos(fold), 0.0))
     a, b = P0[:2] - s.p1, P1[:2] - s.p1
     d = b - a
     dd = float(d @ d)
     u = 0.0 if dd == 0.0 else min(1.0, max(0.0, -float(a @ d) / dd))
     if np.linalg.norm(a + u * d) < r_min - 1e-9:
+        if r_min > abs(s.l1 - s.l2) + 1e-9:
+            raise KinematicsError.joint_limit(2)
         raise KinematicsError.out_of_range("straight line passes too close to the J1 axis")
 
 
@@ -200,7 +206,8 @@ def plan_straight_move(kin: RobotKinematics, q0, T1, vmax, amax, cart_speed_max,
     Limits: joint |qd| <= vmax, |qdd| <= amax, and the flange's linear speed
     <= cart_speed_max (m/s).  Raises KinematicsError: -1022 when `righty` asks for a
     configuration change, -610 when the line leaves the workspace, -1021 when a joint
-    would pass its limit on the way."""
+    would pass its limit on the way (J2 for a line passing closer to the J1 axis than the
+    elbow can fold)."""
     q0 = np.array(q0, dtype=float)
     T1 = np.asarray(T1, dtype=float)
     vmax = np.asarray(vmax, float)
@@ -222,7 +229,7 @@ def plan_straight_move(kin: RobotKinematics, q0, T1, vmax, amax, cart_speed_max,
         return Trajectory.still(q0)
     if kin.scara is not None:
         s = kin.scara
-        _segment_clear_of_hole(kin, (T0 @ s.M4f_inv)[:3, 3], (T1 @ s.M4f_inv)[:3, 3])
+        _segment_clear_of_hole(kin, (T0 @ s.M4f_inv)[:3, 3], (T1 @ s.M4f_inv)[:3, 3], config)
 
     n = max(2, int(math.ceil(length / WAYPOINT_SPACING)), int(math.ceil(angle / WAYPOINT_ANGLE))) + 1
     for attempt in range(MAX_REFINEMENTS + 1):

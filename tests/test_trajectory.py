@@ -1,0 +1,198 @@
+"""Time-optimal trajectories (twin.controller.trajectory) on the Cobra s600 model."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from twin.controller.kinematics import (
+    JOINT_LIMIT,
+    LOCATION_OUT_OF_RANGE,
+    STRAIGHT_LINE_CONFIG,
+    KinematicsError,
+    RobotKinematics,
+)
+from twin.controller.location import Location
+from twin.controller.trajectory import joint_move_time, plan_joint_move, plan_straight_move
+
+ROBOT = Path(__file__).resolve().parents[1] / "models" / "robots" / "cobra_s600.xml"
+DT = 0.0005
+
+
+@pytest.fixture(scope="module")
+def kin() -> RobotKinematics:
+    return RobotKinematics.from_mjcf(ROBOT)
+
+
+def _pose(x, y, z, roll):
+    T = Location(x * 1e3, y * 1e3, z * 1e3, 0, 180, roll).matrix()
+    T[:3, 3] /= 1e3
+    return T
+
+
+def _random_q(kin, rng, righty=True):
+    q = rng.uniform(kin.lower * 0.8, kin.upper * 0.8)
+    q[1] = abs(q[1]) if righty else -abs(q[1])
+    q[1] = np.sign(q[1]) * max(abs(q[1]), 0.4)
+    q[3] = rng.uniform(-3, 3)
+    return q
+
+
+def _check_limits(traj, vmax, amax, tol=0.02):
+    t, q, qd = traj.sample(DT)
+    assert np.all(np.abs(qd) <= vmax * (1 + tol) + 1e-12)
+    qdd = np.diff(qd, axis=0) / np.diff(t)[:, None]
+    assert np.all(np.abs(qdd) <= amax * (1 + tol) + 1e-9)
+    # qd is the derivative of q
+    fd = np.diff(q, axis=0) / np.diff(t)[:, None]
+    mid = (qd[1:] + qd[:-1]) / 2
+    assert np.allclose(fd, mid, atol=1e-3 * np.max(vmax))
+    return t, q, qd, qdd
+
+
+def test_joint_move_limits_endpoints_and_analytic_time(kin):
+    rng = np.random.default_rng(0)
+    vmax, amax = kin.max_velocity, kin.max_acceleration
+    shapes = set()
+    for _ in range(12):
+        q0, q1 = _random_q(kin, rng), _random_q(kin, rng, righty=bool(rng.integers(2)))
+        if rng.integers(3) == 0:  # short moves: triangular profiles
+            q1 = q0 + (q1 - q0) * 0.02
+        traj = plan_joint_move(q0, q1, vmax, amax)
+        t, q, qd, qdd = _check_limits(traj, vmax, amax)
+        assert np.array_equal(q[0], q0) and np.array_equal(q[-1], q1)
+        assert np.array_equal(traj.q_start, q0) and np.array_equal(traj.q_end, q1)
+        assert np.all(qd[0] == 0) and np.all(qd[-1] == 0)
+        assert t[-1] == traj.duration
+        analytic = joint_move_time(q0, q1, vmax, amax)
+        assert traj.duration == pytest.approx(analytic, rel=0.01)
+        # time optimal: some joint uses its full acceleration
+        assert np.max(np.abs(qdd) / amax) > 0.97
+        shapes.add(bool(np.max(np.abs(qd) / vmax) > 0.99))  # cruise reached: trapezoid
+        # straight line in joint space
+        moving = np.abs(q1 - q0) > 1e-6
+        u = (q[:, moving] - q0[moving]) / (q1 - q0)[None, moving]
+        assert np.allclose(u, u[:, :1], atol=1e-9)
+    assert shapes == {True, False}  # both trapezoid and triangle profiles were tested
+
+
+def test_joint_move_slow_speed_scales_time(kin):
+    q0, q1 = np.array([0.0, 1.0, 0.0, 0.0]), np.array([1.0, 0.5, 0.1, 2.0])
+    fast = plan_joint_move(q0, q1, kin.max_velocity, kin.max_acceleration)
+    slow = plan_joint_move(q0, q1, kin.max_velocity * 0.1, kin.max_acceleration)
+    assert slow.duration > 3 * fast.duration
+    assert slow.duration == pytest.approx(joint_move_time(q0, q1, kin.max_velocity * 0.1, kin.max_acceleration),
+                                          rel=0.01)
+
+
+def test_sample_times_include_the_end(kin):
+    traj = plan_joint_move(np.zeros(4), np.array([0.1, 0.1, 0.01, 0.1]), kin.max_velocity, kin.max_acceleration)
+    t, q, qd = traj.sample(0.002)
+    assert np.allclose(np.diff(t[:-1]), 0.002) and 0 < t[-1] - t[-2] <= 0.002 + 1e-12
+    assert t[0] == 0.0 and t[-1] == traj.duration
+    q_mid, qd_mid = traj.at(t[5])
+    assert np.allclose(q_mid, q[5]) and np.allclose(qd_mid, qd[5])
+    assert np.array_equal(traj.at(10.0)[0], traj.q_end)
+
+
+def test_zero_length_moves(kin):
+    q = np.array([0.2, 1.0, 0.1, 0.3])
+    traj = plan_joint_move(q, q, kin.max_velocity, kin.max_acceleration)
+    assert traj.duration == 0.0
+    t, qs, qd = traj.sample(0.002)
+    assert t.tolist() == [0.0] and np.array_equal(qs[0], q) and not qd.any()
+    traj = plan_straight_move(kin, q, kin.fk(q), kin.max_velocity, kin.max_acceleration, 1.0)
+    assert traj.duration == 0.0 and np.array_equal(traj.sample(0.002)[1][-1], q)
+
+
+def test_pure_j4_rotation(kin):
+    q0 = np.array([0.2, 1.0, 0.1, 0.3])
+    q1 = q0 + np.array([0, 0, 0, 1.5])
+    traj = plan_joint_move(q0, q1, kin.max_velocity, kin.max_acceleration)
+    assert traj.duration == pytest.approx(joint_move_time(q0, q1, kin.max_velocity, kin.max_acceleration), rel=0.01)
+    straight = plan_straight_move(kin, q0, kin.fk(q1), kin.max_velocity, kin.max_acceleration, 1.0)
+    t, q, qd = straight.sample(DT)
+    assert np.allclose(q[:, :3], q0[:3], atol=1e-9)  # only J4 turns
+    assert np.allclose(q[-1], q1, atol=1e-9)
+    assert straight.duration == pytest.approx(traj.duration, rel=0.01)
+
+
+def _line_deviation(kin, traj, p0, p1):
+    t, q, qd = traj.sample(0.0002)
+    P = kin.fk_positions(q)
+    d = p1 - p0
+    u = np.clip((P - p0) @ d / (d @ d), 0, 1)
+    return np.max(np.linalg.norm(P - (p0 + u[:, None] * d), axis=1)), P, t
+
+
+def test_straight_moves_stay_on_the_line_within_limits(kin):
+    rng = np.random.default_rng(7)
+    vmax, amax = kin.max_velocity, kin.max_acceleration
+    cart = 1.5
+    done = 0
+    while done < 8:
+        q0 = _random_q(kin, rng)
+        q1 = _random_q(kin, rng)
+        try:
+            traj = plan_straight_move(kin, q0, kin.fk(q1), vmax, amax, cart)
+        except KinematicsError:
+            continue  # the line leaves the workspace or a joint range: tested below
+        done += 1
+        p0, p1 = kin.fk(q0)[:3, 3], kin.fk(q1)[:3, 3]
+        dev, P, t = _line_deviation(kin, traj, p0, p1)
+        assert dev < 0.1e-3
+        _check_limits(traj, vmax, amax)
+        speed = np.linalg.norm(np.diff(P, axis=0), axis=1) / np.diff(t)
+        assert speed.max() <= cart * 1.02
+        qs = traj.sample(DT)[1]
+        assert np.array_equal(qs[0], q0)
+        assert np.allclose(kin.fk(qs[-1]), kin.fk(q1), atol=1e-9)
+        assert all(kin.is_righty(q) for q in qs[:: max(1, len(qs) // 50)])
+        # orientation follows the slerp: the roll changes monotonically
+        yaw = np.unwrap([np.arctan2(kin.fk(q)[1, 0], kin.fk(q)[0, 0]) for q in qs[:: max(1, len(qs) // 40)]])
+        assert np.all(np.diff(yaw) >= -1e-9) or np.all(np.diff(yaw) <= 1e-9)
+
+
+def test_straight_move_tcp_speed_limit_governs_long_lines(kin):
+    q0 = kin.ik(_pose(0.45, -0.25, 0.30, 0), np.array([0, 1, 0, 0]), righty=True)
+    T1 = _pose(0.45, 0.25, 0.30, 0)
+    slow = plan_straight_move(kin, q0, T1, kin.max_velocity, kin.max_acceleration, 0.25)
+    dev, P, t = _line_deviation(kin, slow, kin.fk(q0)[:3, 3], T1[:3, 3])
+    speed = np.linalg.norm(np.diff(P, axis=0), axis=1) / np.diff(t)
+    assert speed.max() == pytest.approx(0.25, rel=0.02)  # cruise at the TCP limit
+    assert slow.duration > 0.5 / 0.25
+    assert dev < 0.1e-3
+
+
+def test_straight_line_errors(kin):
+    q0 = kin.ik(_pose(0.3, -0.2, 0.3, 0), np.array([0, 1, 0, 0]), righty=True)
+    vmax, amax = kin.max_velocity, kin.max_acceleration
+    # A straight-line motion cannot change the arm configuration.
+    with pytest.raises(KinematicsError) as info:
+        plan_straight_move(kin, q0, _pose(0.3, 0.2, 0.3, 0), vmax, amax, 1.0, righty=False)
+    assert info.value.code == STRAIGHT_LINE_CONFIG
+    # Past the J1 axis closer than the elbow folds (J2 +/-150 deg: 163 mm), both ends reachable.
+    qa = kin.ik(_pose(0.160, -0.06, 0.3, 0), np.array([0, 2.5, 0, 0]), righty=True)
+    kin.ik(_pose(0.160, 0.06, 0.3, 0), qa, righty=True)
+    with pytest.raises(KinematicsError) as info:
+        plan_straight_move(kin, qa, _pose(0.160, 0.06, 0.3, 0), vmax, amax, 1.0)
+    assert info.value.code == JOINT_LIMIT and info.value.joint == 2
+    # Target beyond the reach.
+    with pytest.raises(KinematicsError) as info:
+        plan_straight_move(kin, q0, _pose(0.62, 0.0, 0.3, 0), vmax, amax, 1.0)
+    assert info.value.code == LOCATION_OUT_OF_RANGE
+
+
+def test_hole_check_sees_a_line_between_waypoints(kin):
+    """The analytic check catches a line that dips into the unreachable disc around J1
+    even where no waypoint would land inside it."""
+    from twin.controller.trajectory import _segment_clear_of_hole
+
+    r_min = np.sqrt(0.325**2 + 0.275**2 + 2 * 0.325 * 0.275 * np.cos(kin.upper[1]))
+    a, b = np.array([r_min - 1e-5, -0.004, 0.3]), np.array([r_min - 1e-5, 0.004, 0.3])
+    with pytest.raises(KinematicsError) as info:
+        _segment_clear_of_hole(kin, a, b, righty=True)
+    assert info.value.code == JOINT_LIMIT and info.value.joint == 2
+    _segment_clear_of_hole(kin, a + [2e-5, 0, 0], b + [2e-5, 0, 0], righty=True)  # just clear: fine
