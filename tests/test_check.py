@@ -74,7 +74,8 @@ def test_regions_derived_and_unplaced_not_counted():
 def test_error_fields_default_to_null():
     r = make_report(errors=[{"message": "boom"}])
     assert r.errors == [{"message": "boom", "code": None, "file": None, "line": None,
-                         "column": None, "time": None}]
+                         "column": None, "step": None, "program": None,
+                         "time": None}]
 
 
 def test_non_finite_value_is_refused():
