@@ -13,6 +13,7 @@ stopped on an error, 2 when the command line or an input file is wrong.
 from __future__ import annotations
 
 import argparse
+import statistics
 import sys
 from pathlib import Path
 
@@ -39,7 +40,9 @@ def _run(args: argparse.Namespace) -> int:
     regions = ", ".join(f"{name} {count}" for name, count in report.regions.items() if count)
     print(
         f"twin: {report.sim_time_s:.1f} s simulated in {report.wall_time_s:.1f} s "
-        f"({rate:.1f}x real time); {len(report.parts)} parts: {regions or 'none placed'}",
+        f"({rate:.1f}x real time); {len(report.parts)} parts: {regions or 'none placed'}"
+        + (f"; cycle time {statistics.median(report.cycle_times_s):.3f} s (median)"
+           if report.cycle_times_s else ""),
         file=sys.stderr,
     )
     return 1 if report.errors else 0

@@ -25,6 +25,14 @@ class RunResult:
     simulation: Simulation
 
 
+def cycle_times(events: list[dict]) -> list[float]:
+    """Seconds between consecutive put-downs: the robot's cycle time per part, as a cell
+    designer times it (the first part, which includes the move from the start pose, only
+    starts the clock)."""
+    times = [e["time"] for e in events if e["kind"] == "release"]
+    return [round(b - a, 4) for a, b in zip(times, times[1:])]
+
+
 def _open_recorder(sim: Simulation, rrd_path: str | Path | None):
     if rrd_path is None:
         return None
@@ -72,13 +80,12 @@ def run_program(
         sim.recorder.log_text(sim.cell.time, system.console.output or "(no output)")
         sim.recorder.close()
 
+    events = [{"time": e.get("t"), **{k: v for k, v in e.items() if k != "t"}} for e in sim.cell.events]
     report = Report(
         program=str(program), scene=str(scene), seed=sim.cell.seed,
         sim_time_s=round(outcome.sim_time_s, 6), wall_time_s=round(outcome.wall_time_s, 3),
         output=system.console.output, errors=outcome.errors, parts=sim.cell.parts_report(),
-        regions=sim.cell.region_counts(), events=[
-            {"time": e.get("t"), **{k: v for k, v in e.items() if k != "t"}} for e in sim.cell.events
-        ],
+        regions=sim.cell.region_counts(), events=events, cycle_times_s=cycle_times(events),
     )
     if report_path is not None:
         report.write(report_path)

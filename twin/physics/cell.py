@@ -24,6 +24,7 @@ import time as _time
 from pathlib import Path
 
 import mujoco
+import trimesh
 import numpy as np
 
 from .geometry import MM, flange_ik, matrix_to_quat, vplus_to_matrix, yaw_quat
@@ -171,6 +172,9 @@ class Cell:
             ("bin_wall_yp", [0, (iy + w) / 2, ih / 2], [ix / 2, w / 2, ih / 2]),
         ):
             wb.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, pos=fc + pos, size=size, rgba=col)
+        spreader = b.get("spreader")
+        if spreader is not None:
+            self._add_spreader(spec, fc, spreader)
         if b.get("stand", False) and fc[2] - w > 0.01:
             hs = fc[2] - w
             wb.add_geom(name="bin_stand", type=mujoco.mjtGeom.mjGEOM_BOX, pos=[fc[0], fc[1], hs / 2],
@@ -198,6 +202,21 @@ class Cell:
         self.spec = spec
         self.model = spec.compile()
         self.data = mujoco.MjData(self.model)
+
+    @staticmethod
+    def _add_spreader(spec: mujoco.MjSpec, floor_center: np.ndarray, cfg: dict) -> None:
+        """A spreader cone on the bin floor under the drop point (as in hoppers and bins fed
+        from one spout): a part landing on the apex slides off in the direction its centre of
+        mass leans, so the parts heap around the cone instead of stacking into one column
+        that grows back up to the belt."""
+        radius, height = float(cfg["radius"]) / MM, float(cfg["height"]) / MM
+        centre = np.array(cfg.get("center", floor_center * MM), dtype=float) / MM
+        cone = trimesh.creation.cone(radius=radius, height=height, sections=32)
+        spec.add_mesh(name="bin_spreader", uservert=cone.vertices.flatten(),
+                      userface=cone.faces.flatten())
+        spec.worldbody.add_geom(name="bin_spreader", type=mujoco.mjtGeom.mjGEOM_MESH,
+                                meshname="bin_spreader", pos=[centre[0], centre[1], floor_center[2]],
+                                rgba=[0.3, 0.4, 0.7, 1])
 
     @staticmethod
     def _park_pos(i: int) -> list[float]:

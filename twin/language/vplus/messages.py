@@ -33,6 +33,8 @@ UNKNOWN_KEYWORD = -454  # (LRG)
 LOCATION_OUT_OF_RANGE = -610  # (LRG)
 ROBOT_NOT_ATTACHED = -601  # (LRG)
 COLLISION = -1020  # twin-defined: the real controller does not see the cell
+JOINT_LIMIT = -1021  # twin-defined code; text as the controller prints it, "*Joint N limit stop*"
+STRAIGHT_LINE_CONFIG = -1022  # twin-defined code for the controller's configuration-change refusal
 
 MESSAGES: dict[int, str] = {
     UNEXPECTED_EOF: "*Unexpected end of file*",
@@ -65,6 +67,8 @@ MESSAGES: dict[int, str] = {
     LOCATION_OUT_OF_RANGE: "*Location out of range*",
     ROBOT_NOT_ATTACHED: "*Robot not attached to this program*",
     COLLISION: "*Collision detected*",
+    JOINT_LIMIT: "*Joint limit stop*",
+    STRAIGHT_LINE_CONFIG: "*Straight-line motion can't alter configuration*",
 }
 
 
