@@ -20,7 +20,6 @@ Units: SI inside (m, rad, kg, N, s); reports give positions in mm.
 from __future__ import annotations
 
 import math
-import time as _time
 from pathlib import Path
 
 import mujoco

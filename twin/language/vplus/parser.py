@@ -301,6 +301,6 @@ def parse_file(path: str | Path) -> ast.Module:
     path = Path(path)
     try:
         text = path.read_text(encoding="latin-1")
-    except OSError as err:
+    except OSError:
         raise ProgramError(f"*Nonexistent file* {path}", file=str(path)) from None
     return parse(text, str(path))
