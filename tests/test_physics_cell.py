@@ -253,7 +253,7 @@ def test_opening_mid_air_over_the_table_drops_the_part(cell: Cell):
 
 
 def test_slip_releases_the_part_when_the_grip_is_too_weak(cell: Cell):
-    """With the jaw force cut to almost nothing, the weld's load exceeds 2*mu*F: slip."""
+    """With the jaw force cut to almost nothing, the net load the gripper carries exceeds 2*mu*F: slip."""
     drv = Driver(cell)
     drv.wait_for_part()
     drv.pick()

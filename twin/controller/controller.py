@@ -105,6 +105,17 @@ class MotionSettings:
             self.next[key] = value
 
 
+@dataclass(frozen=True)
+class MotionRecord:
+    """One motion as the controller executed it: for reports, tests and benchmarks."""
+
+    start_s: float  # simulated time the motion began
+    duration_s: float  # planned (toppra) duration
+    overlap_s: float  # how long it ran blended with the motion before it
+    straight: bool
+    destination: Location
+
+
 class _Motion:
     """One planned motion on the controller's timeline of physics steps.
 
@@ -157,6 +168,8 @@ class VirtualController:
         # FINE tolerance per joint, in joint units (rad or m).
         self.fine = np.where(self.prismatic, 2e-5, 1e-4)
         self.moves = 0
+        self.history: list[MotionRecord] = []
+        self._t0 = cell.time - self.step * self.dt
 
     # ------------------------------------------------------------ locations
     def _flange_matrix_m(self, location: Location) -> np.ndarray:
@@ -283,7 +296,8 @@ class VirtualController:
                 destination = self._location_of(q1)
         except KinematicsError as err:
             raise ProgramError(err.message, err.code) from None
-        yield from self._launch(trajectory.stretched(params.duration_s), params, destination, cp)
+        yield from self._launch(trajectory.stretched(params.duration_s), params, destination, cp,
+                                straight and isinstance(target, Location))
 
     def drive(self, joint: int, change: float, speed: float, cp: bool = True):
         """DRIVE joint, change, speed: joint `joint` (1-based) by `change` (deg or mm) at
@@ -343,7 +357,8 @@ class VirtualController:
         else:
             yield self._motion_done
 
-    def _launch(self, trajectory, params: MotionParameters, destination: Location, cp: bool):
+    def _launch(self, trajectory, params: MotionParameters, destination: Location, cp: bool,
+                straight: bool = False):
         """Put a planned motion on the timeline and wait until it begins."""
         motion = _Motion(trajectory, self.dt, params, destination, self._hand_request)
         self._hand_request = None
@@ -353,6 +368,9 @@ class VirtualController:
             overlap = min(last.decel_steps, motion.accel_steps) if cp and last.params.cp else 0
             start = max(start, last.end - overlap)
         motion.start = start
+        overlap_s = (self._motions[-1].end - start) * self.dt if self._motions else 0.0
+        self.history.append(MotionRecord(self._t0 + start * self.dt, trajectory.duration, max(overlap_s, 0.0),
+                                         straight, destination))
         self._motions.append(motion)
         self._q_planned = motion.q[-1].copy()
         self._destination = destination

@@ -97,16 +97,24 @@ class Trajectory:
         return q[0], qd[0]
 
     # ------------------------------------------------------------ phases
-    def _phase_tolerance(self) -> float:
-        return PHASE_TOLERANCE * float(np.max(np.abs(self._a), initial=0.0))
+    def _phases(self) -> tuple[np.ndarray, np.ndarray]:
+        """Knot times and the sign of the path acceleration (+1, 0, -1) on each segment that
+        lasts (grid points toppra places a hair apart give segments of no duration and
+        meaningless accelerations: they are left out)."""
+        keep = np.diff(self._t) > 1e-7
+        a = self._a[keep]
+        tol = PHASE_TOLERANCE * float(np.max(np.abs(a), initial=0.0))
+        sign = np.where(a > tol, 1, np.where(a < -tol, -1, 0))
+        return self._t[:-1][keep], np.diff(self._t)[keep], sign
 
     @property
     def accel_time(self) -> float:
         """Length of the acceleration phase: from the start until the path speed stops rising."""
         if self.duration <= 0.0 or len(self._a) == 0:
             return 0.0
-        falling = np.flatnonzero(self._a <= self._phase_tolerance())
-        return float(self._t[falling[0]]) if len(falling) else self.duration
+        start, _, sign = self._phases()
+        falling = np.flatnonzero(sign <= 0)
+        return float(start[falling[0]]) if len(falling) else self.duration
 
     @property
     def decel_time(self) -> float:
@@ -114,8 +122,12 @@ class Trajectory:
         falling until the end (V+ guide v17 "Robot Speed": accelerate, travel, decelerate)."""
         if self.duration <= 0.0 or len(self._a) == 0:
             return 0.0
-        not_falling = np.flatnonzero(self._a >= -self._phase_tolerance())
-        return self.duration - (float(self._t[not_falling[-1] + 1]) if len(not_falling) else 0.0)
+        start, length, sign = self._phases()
+        not_falling = np.flatnonzero(sign >= 0)
+        if not len(not_falling):
+            return self.duration
+        i = not_falling[-1]
+        return self.duration - float(start[i] + length[i])
 
     def stretched(self, duration: float) -> "Trajectory":
         """The same path taking `duration` seconds (DURATION: a minimum motion time); a motion
@@ -147,9 +159,12 @@ def _parametrize(ss: np.ndarray, waypoints: np.ndarray, vmax: np.ndarray, abound
     acc = constraint.JointAccelerationConstraint(
         abounds, discretization_scheme=constraint.DiscretizationType.Interpolation
     )
-    grid = np.linspace(ss[0], ss[-1], N_GRID)
+    # Grid points closer together near both ends, where a motion speeds up and slows down:
+    # a short acceleration phase spread over a few uniform cells comes out slow.
+    grid = ss[0] + (ss[-1] - ss[0]) * 0.5 * (1.0 - np.cos(np.linspace(0.0, math.pi, N_GRID)))
     if len(ss) > 2:  # also put grid points on the waypoints, where the spline's curvature changes
-        grid = np.unique(np.concatenate([grid, ss]))
+        grid = np.sort(np.concatenate([grid, ss]))
+        grid = grid[np.concatenate([[True], np.diff(grid) > 1e-9])]  # no cells of zero length
     instance = algo.TOPPRA([vel, acc], path, gridpoints=grid, solver_wrapper="seidel",
                            parametrizer="ParametrizeConstAccel")
     out = instance.compute_trajectory(0.0, 0.0)

@@ -13,8 +13,9 @@ Built from a scene file (``scenes/*.toml``) with ``mujoco.MjSpec``:
 Grasping is by friction, made robust with a weld that engages only from real contact:
 when the gripper is commanded closed and BOTH pads touch the same part, the current
 relative pose is written into the weld and the weld is activated; it is released when
-the gripper opens, or when its constraint force exceeds the friction capacity
-2 * mu * grip force (slip: the part is dropped and falls).
+the gripper opens, or when the net force the gripper applies to the part (weld plus jaw
+contacts) exceeds the friction capacity 2 * mu * grip force (slip: the part is dropped
+and falls).
 
 Collisions (docs/motion.md): every check interval the contacts of the robot's and the
 gripper's geoms are examined.  A robot geom touching the fixed cell, or touching a part
@@ -448,9 +449,12 @@ class Cell:
         self._events.append({"t": round(float(d.time), 4), "kind": "grasp", "part": int(i),
                              "where": self.regions.region_of(p2)})
 
-    def _weld_force(self, i: int) -> float:
-        """Norm of the translational constraint force of part i's weld, N."""
-        d = self.data
+    def _grip_load(self, i: int) -> float:
+        """Norm of the net force the gripper applies to part i, N: its weld plus every contact
+        of a robot geom with the part.  The weld and the squeezing pads push against each
+        other (tens of newtons that cancel); only their sum is what friction must carry
+        (the part's weight and inertia, and whatever presses the part against the cell)."""
+        m, d = self.model, self.data
         eq = self._part_eq[i]
         nefc = d.nefc
         # Equality rows come first in the constraint list; only one weld is ever active.
@@ -458,12 +462,22 @@ class Cell:
                               & (d.efc_id[:min(nefc, 12)] == eq))
         if len(rows) < 3:
             return 0.0
-        return float(np.linalg.norm(d.efc_force[rows[:3]]))
+        total = -d.efc_force[rows[:3]]  # the weld pulls body2 (the part) against its error
+        g = self._part_geom[i]
+        wrench = np.zeros(6)
+        for k in range(d.ncon):
+            g1, g2 = d.contact.geom1[k], d.contact.geom2[k]
+            if g not in (g1, g2) or not (self._robot_geom[g1] or self._robot_geom[g2]):
+                continue
+            mujoco.mj_contactForce(m, d, k, wrench)
+            force = d.contact.frame[k].reshape(3, 3).T @ wrench[:3]  # on geom2, world axes
+            total = total + (force if g2 == g else -force)
+        return float(np.linalg.norm(total))
 
     def _check_slip(self) -> None:
         i = self._held
         capacity = 2.0 * self.grip_mu * self.grip_force()
-        force = self._weld_force(i)
+        force = self._grip_load(i)
         if force > capacity:
             self._events.append({"t": round(self.time, 4), "kind": "slip", "part": int(i),
                                  "force_n": round(force, 2), "capacity_n": round(capacity, 2)})
