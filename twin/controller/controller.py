@@ -110,6 +110,7 @@ class MotionRecord:
     """One motion as the controller executed it: for reports, tests and benchmarks."""
 
     start_s: float  # simulated time the motion began
+    end_s: float  # simulated time its last reference was commanded (the destination, at rest)
     duration_s: float  # planned (toppra) duration
     overlap_s: float  # how long it ran blended with the motion before it
     straight: bool
@@ -369,8 +370,8 @@ class VirtualController:
             start = max(start, last.end - overlap)
         motion.start = start
         overlap_s = (self._motions[-1].end - start) * self.dt if self._motions else 0.0
-        self.history.append(MotionRecord(self._t0 + start * self.dt, trajectory.duration, max(overlap_s, 0.0),
-                                         straight, destination))
+        self.history.append(MotionRecord(self._t0 + start * self.dt, self._t0 + motion.end * self.dt,
+                                         trajectory.duration, max(overlap_s, 0.0), straight, destination))
         self._motions.append(motion)
         self._q_planned = motion.q[-1].copy()
         self._destination = destination
@@ -425,9 +426,10 @@ class VirtualController:
         """Feed this physics step's references to the servos: the superposition of the
         motions on the timeline (two only while they blend)."""
         motions = self._motions
+        n = self.step
+        self.step = n + 1
         if not motions:
             return
-        n = self.step
         q = self._anchor.copy()
         qd = np.zeros_like(q)
         for m in motions:
@@ -444,7 +446,6 @@ class VirtualController:
                 qd += m.qd[k]
         self.q_command = q
         self.cell.set_servo(q, qd)
-        self.step = n + 1
         while motions and motions[0].end <= n:
             self._anchor = self._anchor + motions[0].delta[-1]
             motions.pop(0)
