@@ -298,3 +298,15 @@ def test_the_same_program_runs_on_the_cartesian_cell(tmp_path):
     releases = [e for e in report.events if e["kind"] == "release"]
     assert len(releases) >= 5 and all(e["where"] == "conveyor" for e in releases)
     assert not [e for e in report.events if e["kind"] in ("slip", "dropped", "collision")]
+
+
+def test_base_shifts_the_world_frame_relative_to_the_robot():
+    """BASE dx, dy, dz translates the world reference frame relative to the robot (V+ guide
+    v17 L6306, digest §7.3): after BASE 20, -30, 0 the location a is reached 20 mm further
+    along the robot's x and 30 mm back along its y, and HERE still reads a."""
+    sim, task, outcome, _ = run_on_cell(_program("BASE 20, -30, 0", "MOVE a", "BREAK", "SET h = HERE"),
+                                        locations={"a": A})
+    assert outcome.errors == []
+    flange = sim.kinematics.fk(sim.controller.joints())[:3, 3] * 1e3
+    assert np.allclose(flange, A.position() + [20, -30, 0], atol=0.05)
+    assert np.allclose(task.globals["h"].position(), A.position(), atol=0.05)

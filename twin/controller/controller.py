@@ -43,6 +43,7 @@ NULLING_TIMEOUT = -1003  # V+ "*Time-out nulling errors*" (V+ guide v17 L5832)
 COLLISION = -1020  # "*Collision detected*": twin-defined (the real controller does not see the cell)
 NULLING_TIMEOUT_S = 2.0  # how long the servos may take to settle after a move
 TRAJECTORY_CYCLE_S = 0.016  # V+ trajectory generator period (62.5 Hz, V+ guide v17 "Timing Considerations")
+PLAN_CACHE = 64  # planned trajectories kept for reuse
 MM = 1000.0
 MM_PER_INCH = 25.4
 
@@ -170,6 +171,7 @@ class VirtualController:
         self.fine = np.where(self.prismatic, 2e-5, 1e-4)
         self.moves = 0
         self.history: list[MotionRecord] = []
+        self._plans: dict[tuple, Trajectory] = {}
         self._t0 = cell.time - self.step * self.dt
 
     # ------------------------------------------------------------ locations
@@ -282,10 +284,14 @@ class VirtualController:
         try:
             if isinstance(target, Location):
                 if straight:
-                    trajectory = plan_straight_move(
-                        self.kin, q0, self._tip_matrix_m(target), self.kin.max_velocity,
-                        self.kin.max_acceleration, params.cartesian_speed_m_s, righty=righty,
-                        accel=params.accel, decel=params.decel, tool=self._tool_m())
+                    tip, tool = self._tip_matrix_m(target), self._tool_m()
+                    trajectory = self._cached(
+                        ("S", q0.tobytes(), tip.tobytes(), tool.tobytes(), righty, params.cartesian_speed_m_s,
+                         params.accel, params.decel),
+                        lambda: plan_straight_move(self.kin, q0, tip, self.kin.max_velocity,
+                                                   self.kin.max_acceleration, params.cartesian_speed_m_s,
+                                                   righty=righty, accel=params.accel, decel=params.decel,
+                                                   tool=tool))
                 else:
                     q1 = self.kin.ik(self._flange_matrix_m(target), q0, righty=righty, single=params.single)
                     trajectory = self._joint_trajectory(q0, q1, params)
@@ -319,8 +325,21 @@ class VirtualController:
         yield from self._launch(trajectory.stretched(params.duration_s), params, self._location_of(q1), cp)
 
     def _joint_trajectory(self, q0, q1, params: MotionParameters) -> Trajectory:
-        return plan_joint_move(q0, q1, self.kin.max_velocity * params.joint_speed,
-                               self.kin.max_acceleration, accel=params.accel, decel=params.decel)
+        return self._cached(
+            ("J", q0.tobytes(), q1.tobytes(), params.joint_speed, params.accel, params.decel),
+            lambda: plan_joint_move(q0, q1, self.kin.max_velocity * params.joint_speed,
+                                    self.kin.max_acceleration, accel=params.accel, decel=params.decel))
+
+    def _cached(self, key: tuple, plan) -> Trajectory:
+        """A cyclic program asks for the same motions, from the same joints, over and over:
+        planning is deterministic, so a plan is computed once (most recent PLAN_CACHE kept)."""
+        trajectory = self._plans.pop(key, None)
+        if trajectory is None:
+            trajectory = plan()
+            if len(self._plans) >= PLAN_CACHE:
+                self._plans.pop(next(iter(self._plans)))
+        self._plans[key] = trajectory
+        return trajectory
 
     def aligned(self) -> Location:
         """ALIGN's destination: the last destination with its tool Z turned onto the nearest

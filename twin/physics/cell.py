@@ -464,14 +464,14 @@ class Cell:
             return 0.0
         total = -d.efc_force[rows[:3]]  # the weld pulls body2 (the part) against its error
         g = self._part_geom[i]
+        pairs = d.contact.geom[:d.ncon]
+        robot = self._robot_geom[pairs]
+        gripping = np.flatnonzero(((pairs[:, 0] == g) & robot[:, 1]) | ((pairs[:, 1] == g) & robot[:, 0]))
         wrench = np.zeros(6)
-        for k in range(d.ncon):
-            g1, g2 = d.contact.geom1[k], d.contact.geom2[k]
-            if g not in (g1, g2) or not (self._robot_geom[g1] or self._robot_geom[g2]):
-                continue
+        for k in gripping.tolist():
             mujoco.mj_contactForce(m, d, k, wrench)
             force = d.contact.frame[k].reshape(3, 3).T @ wrench[:3]  # on geom2, world axes
-            total = total + (force if g2 == g else -force)
+            total = total + (force if pairs[k, 1] == g else -force)
         return float(np.linalg.norm(total))
 
     def _check_slip(self) -> None:
