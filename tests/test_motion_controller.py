@@ -310,3 +310,13 @@ def test_base_shifts_the_world_frame_relative_to_the_robot():
     flange = sim.kinematics.fk(sim.controller.joints())[:3, 3] * 1e3
     assert np.allclose(flange, A.position() + [20, -30, 0], atol=0.05)
     assert np.allclose(task.globals["h"].position(), A.position(), atol=0.05)
+
+
+def test_cpoff_always_stops_at_every_location_and_cpon_blends_the_next_motion_only():
+    """CPOFF ALWAYS: every motion decelerates to a stop; CPON (no ALWAYS) lets the next
+    motion blend into the one after it (V+ guide v17 "Motion Modifiers", CPON/CPOFF)."""
+    text = _program("CPOFF ALWAYS", "MOVE a", "MOVE b", "CPON", "MOVE a", "MOVE b", "MOVE a", "BREAK")
+    sim, _, outcome, _ = run_on_cell(text, locations={"a": A, "b": B})
+    assert outcome.errors == []
+    overlaps = [m.overlap_s > 0 for m in sim.controller.history]
+    assert overlaps == [False, False, False, True, False]
