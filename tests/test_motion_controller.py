@@ -320,3 +320,22 @@ def test_cpoff_always_stops_at_every_location_and_cpon_blends_the_next_motion_on
     assert outcome.errors == []
     overlaps = [m.overlap_s > 0 for m in sim.controller.history]
     assert overlaps == [False, False, False, True, False]
+
+
+def test_a_program_error_mid_motion_brings_the_robot_to_a_stop_on_its_path():
+    """A program error while the robot is moving (here an undefined variable): the program
+    stops at that step and the robot decelerates to a stop on its path, short of the
+    destination, instead of going on to it."""
+    far = Location(300.0, 150.0, 250.0, *DOWN)
+    program = _program("MOVE a", "BREAK", "SPEED 20", "MOVE b", "x = nothing + 1")
+    sim, _, outcome, rows = run_on_cell(program, locations={"a": A, "b": far})
+    (error,) = outcome.errors
+    assert error["line"] == 6 and error["code"] == -406
+    record = sim.controller.history[1]
+    stop_time = next(t for t, _, _, _, moving in rows if t > record.start_s + 0.02 and not moving)
+    assert stop_time < record.start_s + record.duration_s / 2  # it did not go on to b
+    here = sim.controller.here().position()
+    p0, p1 = A.position(), far.position()
+    d = (p1 - p0) / np.linalg.norm(p1 - p0)
+    assert 0 < (here - p0) @ d < np.linalg.norm(p1 - p0) / 2
+    assert not sim.controller.moving

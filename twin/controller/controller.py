@@ -142,6 +142,25 @@ class _Motion:
     def end(self) -> int:
         return self.start + len(self.q) - 1
 
+    def brake(self, k: int, slack: int) -> None:
+        """From sample k on, slow the playback down linearly to rest over the motion's
+        deceleration time: the robot stops on the same path (unless it arrives first).  A
+        motion within `slack` steps of its deceleration is left to finish."""
+        last = len(self.q) - 1
+        steps = max(self.decel_steps, 1)
+        if k >= last - self.decel_steps - slack:
+            return
+        t = np.arange(steps + 1, dtype=float)
+        u = np.minimum(k + t - t * t / (2 * steps), last)  # fractional sample index
+        rate = 1.0 - t / steps
+        i = np.minimum(np.floor(u).astype(int), last - 1)
+        w = (u - i)[:, None]
+        q = (1 - w) * self.q[i] + w * self.q[i + 1]
+        qd = ((1 - w) * self.qd[i] + w * self.qd[i + 1]) * rate[:, None]
+        self.q = np.concatenate([self.q[:k], q])
+        self.qd = np.concatenate([self.qd[:k], qd])
+        self.delta = self.q - self.q[0]
+
     @property
     def decel_from(self) -> int:
         return self.end - self.decel_steps
@@ -422,13 +441,15 @@ class VirtualController:
         self._destination = self._location_of(self._q_planned)
 
     def stop(self) -> None:
-        """A program error: motions not yet begun are dropped; the robot finishes the motion
-        it is executing, which (motions are planned at their predecessor's blend point) is
-        already slowing down to its destination."""
+        """A program error: the robot decelerates to a stop on its path.  Motions not yet
+        begun are dropped; one already in its final deceleration (as a motion is when the
+        next one fails to plan) goes on to its destination; one at speed slows down along
+        its path over its own deceleration time."""
         self._motions = [m for m in self._motions if m.started]
-        if self._motions:
-            self._q_planned = self._motions[-1].q[-1].copy()
-            self._destination = self._motions[-1].destination
+        for m in self._motions:
+            m.brake(self.step - m.start, self.lookahead)
+        self._q_planned = self._anchor + sum((m.delta[-1] for m in self._motions), np.zeros_like(self._anchor))
+        self._destination = self._location_of(self._q_planned)
 
     def halt(self) -> None:
         """Stop at once where the robot is (a crash): every motion dropped, the servos hold
