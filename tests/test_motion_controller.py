@@ -339,3 +339,18 @@ def test_a_program_error_mid_motion_brings_the_robot_to_a_stop_on_its_path():
     d = (p1 - p0) / np.linalg.norm(p1 - p0)
     assert 0 < (here - p0) @ d < np.linalg.norm(p1 - p0) / 2
     assert not sim.controller.moving
+
+
+def test_monitor_speed_slows_the_same_motion_down_and_program_speed_replans_it():
+    """Monitor speed 50: the same motion, every phase twice as long (V+ Operating System
+    Reference Guide, SPEED monitor command: "the path is unaffected but the accelerations
+    will be modified"); program speed 50 lowers the speed only, the accelerations stay,
+    so the motion takes less than twice as long (V+ guide v17 "Robot Speed")."""
+    times = {}
+    for setting in ("SPEED 100 MONITOR", "SPEED 50 MONITOR", "SPEED 50 ALWAYS"):
+        sim, _, outcome, _ = run_on_cell(_program(setting, "MOVE a", "MOVE b", "BREAK"), locations={"a": A, "b": B})
+        assert outcome.errors == []
+        times[setting] = sim.controller.history[1].end_s - sim.controller.history[1].start_s
+    full = times["SPEED 100 MONITOR"]
+    assert times["SPEED 50 MONITOR"] == pytest.approx(2 * full, abs=0.004)
+    assert full < times["SPEED 50 ALWAYS"] < 2 * full - 0.02

@@ -52,8 +52,9 @@ MM_PER_INCH = 25.4
 class MotionParameters:
     """What one motion is planned with, after the SPEED/ACCEL/DURATION/CP/SINGLE settings."""
 
-    joint_speed: float  # fraction of each joint's maximum speed
-    cartesian_speed_m_s: float  # straight-line tool speed limit
+    joint_speed: float  # fraction of each joint's maximum speed (program speed)
+    cartesian_speed_m_s: float  # straight-line tool speed limit (program speed)
+    time_scale: float  # 100 / monitor speed: the planned motion is slowed down by this
     accel: float  # fraction of the maximum acceleration while speeding up
     decel: float  # ... while slowing down
     duration_s: float  # minimum motion time (DURATION)
@@ -66,7 +67,10 @@ class MotionSettings:
     """Motion settings as V+ keeps them (V+ guide v17, "Robot Speed", "Motion Modifiers").
 
     Settings given without ALWAYS apply to the next motion only (`next`); with ALWAYS
-    they replace the permanent value."""
+    they replace the permanent value.  The program speed sets the speed a motion is
+    planned for, the accelerations staying as they are; the monitor speed then slows the
+    whole planned motion down, path unchanged, every phase taking 100/monitor times as
+    long (V+ Operating System Reference Guide, SPEED monitor command, "Details")."""
 
     monitor_speed: float = 50.0  # % ; 50 at controller start-up
     program_speed: float = 100.0  # % ; 100 when a program starts
@@ -82,15 +86,14 @@ class MotionSettings:
     def take(self) -> MotionParameters:
         """The parameters of the motion about to be planned; next-motion values are used up."""
         once, self.next = self.next, {}
-        speed = once.get("program_speed", self.program_speed) * self.monitor_speed / 1e4
+        speed = min(max(once.get("program_speed", self.program_speed) / 100.0, 1e-3), 1.0)
         absolute = once.get("absolute_speed_mm_s", None if "program_speed" in once else self.absolute_speed_mm_s)
-        if absolute is not None:  # reached only at monitor speed 100 (V+ guide v17, "Robot Speed")
-            cartesian = absolute * self.monitor_speed / 100.0
-        else:
-            cartesian = self.cartesian_speed_mm_s * speed
+        # An absolute speed is reached only at monitor speed 100 (V+ guide v17, "Robot Speed").
+        cartesian = absolute if absolute is not None else self.cartesian_speed_mm_s * speed
         return MotionParameters(
-            joint_speed=max(speed, 1e-3),
+            joint_speed=speed,
             cartesian_speed_m_s=max(cartesian, 1e-3) / MM,
+            time_scale=100.0 / min(max(self.monitor_speed, 0.1), 100.0),
             accel=self.accel / 100.0,
             decel=self.decel / 100.0,
             duration_s=once.get("duration_s", self.duration_s),
@@ -322,7 +325,7 @@ class VirtualController:
                 destination = self._location_of(q1)
         except KinematicsError as err:
             raise ProgramError(err.message, err.code) from None
-        yield from self._launch(trajectory.stretched(params.duration_s), params, destination, cp,
+        yield from self._launch(_timed(trajectory, params), params, destination, cp,
                                 straight and isinstance(target, Location))
 
     def drive(self, joint: int, change: float, speed: float, cp: bool = True):
@@ -341,7 +344,7 @@ class VirtualController:
         except KinematicsError as err:
             raise ProgramError(err.message, err.code) from None
         trajectory = self._joint_trajectory(self._q_planned, q1, params)
-        yield from self._launch(trajectory.stretched(params.duration_s), params, self._location_of(q1), cp)
+        yield from self._launch(_timed(trajectory, params), params, self._location_of(q1), cp)
 
     def _joint_trajectory(self, q0, q1, params: MotionParameters) -> Trajectory:
         return self._cached(
@@ -499,6 +502,11 @@ class VirtualController:
     def hand(self, state: str) -> None:
         """Drive the gripper valves: 'open', 'close' or 'relax'."""
         self.cell.set_gripper(closed=(state == "close"))
+
+
+def _timed(trajectory: Trajectory, params: MotionParameters) -> Trajectory:
+    """The planned motion slowed by the monitor speed, and to DURATION if that is longer."""
+    return trajectory.stretched(max(trajectory.duration * params.time_scale, params.duration_s))
 
 
 class _Still(Trajectory):

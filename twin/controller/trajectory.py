@@ -130,8 +130,8 @@ class Trajectory:
         return self.duration - float(start[i] + length[i])
 
     def stretched(self, duration: float) -> "Trajectory":
-        """The same path taking `duration` seconds (DURATION: a minimum motion time); a motion
-        that already takes that long is returned unchanged."""
+        """The same path slowed down uniformly to take `duration` seconds (monitor speed,
+        DURATION); a motion that already takes that long is returned unchanged."""
         if self.duration <= 0.0 or duration <= self.duration:
             return self
         f = duration / self.duration
