@@ -115,7 +115,7 @@ class MotionRecord:
 
     start_s: float  # simulated time the motion began
     end_s: float  # simulated time its last reference was commanded (the destination, at rest)
-    duration_s: float  # planned (toppra) duration
+    duration_s: float  # planned duration: toppra's, slowed by the monitor speed and DURATION
     overlap_s: float  # how long it ran blended with the motion before it
     straight: bool
     destination: Location
@@ -132,7 +132,6 @@ class _Motion:
                  destination: Location, hand: str | None):
         _, self.q, self.qd = trajectory.sample(dt)
         self.delta = self.q - self.q[0]  # what this motion adds to the reference
-        self.trajectory = trajectory
         self.params = params
         self.destination = destination
         self.hand = hand
@@ -191,10 +190,9 @@ class VirtualController:
         self.prismatic = np.array([cell.model.joint(n).type == 2 for n in cell.robot_joint_names])
         # FINE tolerance per joint, in joint units (rad or m).
         self.fine = np.where(self.prismatic, 2e-5, 1e-4)
-        self.moves = 0
         self.history: list[MotionRecord] = []
         self._plans: dict[tuple, Trajectory] = {}
-        self._t0 = cell.time - self.step * self.dt
+        self._t0 = cell.time  # simulated time of step 0
 
     # ------------------------------------------------------------ locations
     def _flange_matrix_m(self, location: Location) -> np.ndarray:
@@ -416,7 +414,6 @@ class VirtualController:
         self._motions.append(motion)
         self._q_planned = motion.q[-1].copy()
         self._destination = destination
-        self.moves += 1
         if start > self.step:
             yield lambda: motion.started or motion not in self._motions
 

@@ -20,7 +20,7 @@ def _cp(rt) -> bool:
     return rt.switch("CP")
 
 
-def _destination(rt, value):
+def _destination(value):
     """A motion's target: a Location, or a precision point's joint values."""
     if isinstance(value, tuple):
         return value
@@ -43,7 +43,7 @@ def _always(names: tuple) -> bool:
 
 @instruction("MOVE", waits=True)
 def _move(rt, loc):
-    yield from rt.robot.move(_destination(rt, loc), straight=False, cp=_cp(rt))
+    yield from rt.robot.move(_destination(loc), straight=False, cp=_cp(rt))
 
 
 @instruction("MOVES", waits=True)
