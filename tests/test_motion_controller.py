@@ -134,19 +134,24 @@ def test_continuous_path_blends_only_in_the_decel_and_accel_phases():
 
 
 def test_a_straight_line_stays_within_0_1_mm_of_the_line():
-    """MOVES: the tool tip on the straight line (V+ guide v17 L6336-6343); the commanded
-    path of the controller, checked every 16 ms, and the measured flange at the end."""
+    """MOVES: the tool tip on the straight line (V+ guide v17 L6336-6343), at full speed:
+    the controller's commanded path and the flange the servos actually move (MuJoCo, with
+    velocity and acceleration feed-forward), sampled every 16 ms."""
     sim, _, outcome, rows = run_on_cell(_program("MOVE a", "BREAK", "MOVES b", "BREAK"),
                                         locations={"a": A, "b": B})
     assert outcome.errors == []
     start = sim.controller.history[1].start_s
-    path = _tip_path(sim, [r for r in rows if r[0] >= start])
+    moving = [r for r in rows if r[0] >= start]
+    commanded = _tip_path(sim, moving)
+    measured = np.array([sim.kinematics.fk(q)[:3, 3] * 1e3 for _, q, _, _, _ in moving])
     p0, p1 = A.position(), B.position()
     d = (p1 - p0) / np.linalg.norm(p1 - p0)
-    off = path - p0
-    deviation = np.linalg.norm(off - np.outer(off @ d, d), axis=1)
-    assert deviation.max() < 0.1
-    assert np.linalg.norm(path[-1] - p1) < 1e-3
+    for path in (commanded, measured):
+        off = path - p0
+        deviation = np.linalg.norm(off - np.outer(off @ d, d), axis=1)
+        assert deviation.max() < 0.1
+    assert np.linalg.norm(commanded[-1] - p1) < 1e-3
+    assert np.linalg.norm(measured[-1] - p1) < 0.02
 
 
 @pytest.mark.parametrize("straight", [False, True])
@@ -323,21 +328,22 @@ def test_cpoff_always_stops_at_every_location_and_cpon_blends_the_next_motion_on
 
 
 def test_a_program_error_mid_motion_brings_the_robot_to_a_stop_on_its_path():
-    """A program error while the robot is moving (here an undefined variable): the program
-    stops at that step and the robot decelerates to a stop on its path, short of the
-    destination, instead of going on to it."""
+    """A program error while the robot is moving (here an undefined variable, 0.15 s into a
+    slow motion): the program stops at that step and the robot decelerates to a stop on its
+    path, short of the destination, instead of going on to it."""
     far = Location(300.0, 150.0, 250.0, *DOWN)
-    program = _program("MOVE a", "BREAK", "SPEED 20", "MOVE b", "x = nothing + 1")
+    program = _program("MOVE a", "BREAK", "SPEED 20", "MOVE b", "t0 = TIMER(1)", "WAIT TIMER(1) > t0 + 0.15",
+                       "x = nothing + 1")
     sim, _, outcome, rows = run_on_cell(program, locations={"a": A, "b": far})
     (error,) = outcome.errors
-    assert error["line"] == 6 and error["code"] == -406
+    assert error["line"] == 8 and error["code"] == -406
     record = sim.controller.history[1]
     stop_time = next(t for t, _, _, _, moving in rows if t > record.start_s + 0.02 and not moving)
-    assert stop_time < record.start_s + record.duration_s / 2  # it did not go on to b
+    assert stop_time < record.end_s - 0.1  # it did not go on to b
     here = sim.controller.here().position()
     p0, p1 = A.position(), far.position()
     d = (p1 - p0) / np.linalg.norm(p1 - p0)
-    assert 0 < (here - p0) @ d < np.linalg.norm(p1 - p0) / 2
+    assert 0 < (here - p0) @ d < 0.8 * np.linalg.norm(p1 - p0)
     assert not sim.controller.moving
 
 

@@ -131,7 +131,9 @@ class _Motion:
     def __init__(self, trajectory: Trajectory, dt: float, params: MotionParameters,
                  destination: Location, hand: str | None):
         _, self.q, self.qd = trajectory.sample(dt)
+        self.dt = dt
         self.delta = self.q - self.q[0]  # what this motion adds to the reference
+        self.qdd = self._acceleration()
         self.params = params
         self.destination = destination
         self.hand = hand
@@ -162,6 +164,13 @@ class _Motion:
         self.q = np.concatenate([self.q[:k], q])
         self.qd = np.concatenate([self.qd[:k], qd])
         self.delta = self.q - self.q[0]
+        self.qdd = self._acceleration()
+
+    def _acceleration(self) -> np.ndarray:
+        """Reference accelerations at the samples (for the servos' feed-forward)."""
+        if len(self.qd) < 2:
+            return np.zeros_like(self.qd)
+        return np.gradient(self.qd, self.dt, axis=0)
 
     @property
     def decel_from(self) -> int:
@@ -472,6 +481,7 @@ class VirtualController:
             return
         q = self._anchor.copy()
         qd = np.zeros_like(q)
+        qdd = np.zeros_like(q)
         for m in motions:
             k = n - m.start
             if k < 0:
@@ -484,8 +494,9 @@ class VirtualController:
             q += m.delta[k]
             if k < len(m.q) - 1:
                 qd += m.qd[k]
+                qdd += m.qdd[k]
         self.q_command = q
-        self.cell.set_servo(q, qd)
+        self.cell.set_servo(q, qd, qdd)
         while motions and motions[0].end <= n:
             self._anchor = self._anchor + motions[0].delta[-1]
             motions.pop(0)

@@ -241,6 +241,8 @@ class Cell:
         jids = [m.joint(n).id for n in self.robot_joint_names]
         self._rq = np.array([m.jnt_qposadr[j] for j in jids])
         self._rv = np.array([m.jnt_dofadr[j] for j in jids])
+        self._qdd_full = np.zeros(m.nv)  # scratch vectors for the acceleration feed-forward
+        self._torque_full = np.zeros(m.nv)
         self._act_pos = np.array([m.actuator(f"{n}_pos").id for n in self.robot_joint_names])
         self._act_vel = np.array([m.actuator(f"{n}_vel").id for n in self.robot_joint_names])
         gp = self._gp
@@ -334,11 +336,20 @@ class Cell:
         """Robot joint velocities (rad/s, m/s)."""
         return self.data.qvel[self._rv].copy()
 
-    def set_servo(self, q: np.ndarray, qd: np.ndarray) -> None:
-        """Servo references: positions (rad, m) and velocity feed-forward (rad/s, m/s)."""
+    def set_servo(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray | None = None) -> None:
+        """Servo references: positions (rad, m), velocity feed-forward (rad/s, m/s) and, when
+        given, acceleration feed-forward (rad/s^2, m/s^2): the drives add the torque M(q) qdd
+        that the planned acceleration needs, as a servo with inertia feed-forward does."""
         ctrl = self.data.ctrl
         ctrl[self._act_pos] = q
         ctrl[self._act_vel] = qd
+        applied = self.data.qfrc_applied
+        if qdd is None:
+            applied[self._rv] = 0.0
+            return
+        self._qdd_full[self._rv] = qdd
+        mujoco.mj_mulM(self.model, self.data, self._torque_full, self._qdd_full)
+        applied[self._rv] = self._torque_full[self._rv]
 
     def set_gripper(self, closed: bool) -> None:
         """Command the jaws closed or open. Opening releases any held part at once."""
