@@ -360,3 +360,17 @@ def test_monitor_speed_slows_the_same_motion_down_and_program_speed_replans_it()
     full = times["SPEED 100 MONITOR"]
     assert times["SPEED 50 MONITOR"] == pytest.approx(2 * full, abs=0.004)
     assert full < times["SPEED 50 ALWAYS"] < 2 * full - 0.02
+
+
+def test_delay_stops_the_robot_for_that_long_between_motions():
+    """DELAY t: the robot comes to a stop and stands still t seconds before the next motion
+    (V+ guide v17 motion table, DELAY); a SPEED for the next motion is kept for the next
+    real motion."""
+    text = _program("MOVE a", "SPEED 25", "DELAY 0.5", "MOVE b", "MOVE a", "BREAK")
+    sim, _, outcome, _ = run_on_cell(text, locations={"a": A, "b": B})
+    assert outcome.errors == []
+    move_a, still, move_b, back = sim.controller.history
+    assert 0 <= still.start_s - move_a.end_s <= 0.0161  # no blend into a standstill
+    assert still.end_s - still.start_s == pytest.approx(0.5, abs=0.002)
+    assert move_b.start_s == pytest.approx(still.end_s, abs=0.016)
+    assert move_b.duration_s > 2 * back.duration_s  # SPEED 25 went to MOVE b

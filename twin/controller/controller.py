@@ -83,9 +83,12 @@ class MotionSettings:
     single: bool = False  # SINGLE / MULTIPLE ALWAYS
     next: dict = field(default_factory=dict)  # next-motion-only values, same keys
 
-    def take(self) -> MotionParameters:
-        """The parameters of the motion about to be planned; next-motion values are used up."""
-        once, self.next = self.next, {}
+    def take(self, consume: bool = True) -> MotionParameters:
+        """The parameters of the motion about to be planned; next-motion values are used up
+        unless `consume` is false."""
+        once = self.next
+        if consume:
+            self.next = {}
         speed = min(max(once.get("program_speed", self.program_speed) / 100.0, 1e-3), 1.0)
         absolute = once.get("absolute_speed_mm_s", None if "program_speed" in once else self.absolute_speed_mm_s)
         # An absolute speed is reached only at monitor speed 100 (V+ guide v17, "Robot Speed").
@@ -393,7 +396,9 @@ class VirtualController:
         """DELAY: a motion that stands still for `seconds` (the robot stops before it)."""
         yield from self._wait_for_queue(cp=False)
         trajectory = _Still(self._q_planned, max(float(seconds), self.dt))
-        yield from self._launch(trajectory, self.settings.take(), self._destination, cp=False)
+        # Standing still leaves the next-motion settings (SPEED without ALWAYS...) to the next
+        # real motion.
+        yield from self._launch(trajectory, self.settings.take(consume=False), self._destination, cp=False)
 
     def _wait_for_queue(self, cp: bool):
         """Wait until the last motion on the timeline is in its deceleration (blend possible)
