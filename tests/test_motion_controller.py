@@ -374,3 +374,31 @@ def test_delay_stops_the_robot_for_that_long_between_motions():
     assert still.end_s - still.start_s == pytest.approx(0.5, abs=0.002)
     assert move_b.start_s == pytest.approx(still.end_s, abs=0.016)
     assert move_b.duration_s > 2 * back.duration_s  # SPEED 25 went to MOVE b
+
+
+def test_straight_line_with_an_offset_tool_keeps_the_tool_tip_on_the_line():
+    """With TOOL set, MOVES moves the tool tip, not the flange, in a straight line: a tool
+    50 mm off the quill axis and a 90 deg turn of the tool on the way, so the flange
+    itself must swing off the line."""
+    tool = Location(50.0, 0.0, 80.0, 0.0, 0.0, 0.0)
+    a = Location(350.0, -100.0, 200.0, 0.0, 180.0, 180.0)
+    b = Location(300.0, 100.0, 200.0, 0.0, 180.0, 90.0)
+    sim, _, outcome, rows = run_on_cell(_program("TOOL t", "MOVE a", "BREAK", "MOVES b", "BREAK"),
+                                        locations={"a": a, "b": b, "t": tool})
+    assert outcome.errors == []
+    start = sim.controller.history[1].start_s
+    flange = [sim.kinematics.fk(qc) for t, _, qc, _, _ in rows if t >= start]
+    T_tool = tool.matrix()
+    T_tool[:3, 3] /= 1e3
+    tips = np.array([(T @ T_tool)[:3, 3] * 1e3 for T in flange])
+    flanges = np.array([T[:3, 3] * 1e3 for T in flange])
+
+    def deviation(path):  # from the line through the path's own end points
+        p0, p1 = path[0], path[-1]
+        d = (p1 - p0) / np.linalg.norm(p1 - p0)
+        off = path - p0
+        return np.linalg.norm(off - np.outer(off @ d, d), axis=1).max()
+
+    assert np.linalg.norm(tips[0] - a.position()) < 1e-3 and np.linalg.norm(tips[-1] - b.position()) < 1e-3
+    assert deviation(tips) < 0.1
+    assert deviation(flanges) > 5.0
