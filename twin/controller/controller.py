@@ -137,6 +137,7 @@ class _Motion:
         self.dt = dt
         self.delta = self.q - self.q[0]  # what this motion adds to the reference
         self.qdd = self._acceleration()
+        self.last = len(self.q) - 1  # index of the last sample
         self.params = params
         self.destination = destination
         self.hand = hand
@@ -147,7 +148,7 @@ class _Motion:
 
     @property
     def end(self) -> int:
-        return self.start + len(self.q) - 1
+        return self.start + self.last
 
     def brake(self, k: int, slack: int) -> None:
         """From sample k on, slow the playback down linearly to rest over the motion's
@@ -168,12 +169,14 @@ class _Motion:
         self.qd = np.concatenate([self.qd[:k], qd])
         self.delta = self.q - self.q[0]
         self.qdd = self._acceleration()
+        self.last = len(self.q) - 1
 
     def _acceleration(self) -> np.ndarray:
-        """Reference accelerations at the samples (for the servos' feed-forward)."""
-        if len(self.qd) < 2:
-            return np.zeros_like(self.qd)
-        return np.gradient(self.qd, self.dt, axis=0)
+        """Reference accelerations at the samples (for the servos' feed-forward); none at the
+        last sample, where the motion is over."""
+        qdd = np.zeros_like(self.qd) if len(self.qd) < 2 else np.gradient(self.qd, self.dt, axis=0)
+        qdd[-1] = 0.0
+        return qdd
 
     @property
     def decel_from(self) -> int:
@@ -484,9 +487,7 @@ class VirtualController:
         self.step = n + 1
         if not motions:
             return
-        q = self._anchor.copy()
-        qd = np.zeros_like(q)
-        qdd = np.zeros_like(q)
+        q, qd, qdd = self._anchor, None, None
         for m in motions:
             k = n - m.start
             if k < 0:
@@ -495,13 +496,14 @@ class VirtualController:
                 m.started = True
                 if m.hand is not None:
                     self.hand(m.hand)
-            k = min(k, len(m.q) - 1)
-            q += m.delta[k]
-            if k < len(m.q) - 1:
-                qd += m.qd[k]
-                qdd += m.qdd[k]
-        self.q_command = q
-        self.cell.set_servo(q, qd, qdd)
+            k = min(k, m.last)
+            if qd is None:
+                q, qd, qdd = q + m.delta[k], m.qd[k], m.qdd[k]
+            else:
+                q, qd, qdd = q + m.delta[k], qd + m.qd[k], qdd + m.qdd[k]
+        if qd is not None:
+            self.q_command = q
+            self.cell.set_servo(q, qd, qdd)
         while motions and motions[0].end <= n:
             self._anchor = self._anchor + motions[0].delta[-1]
             motions.pop(0)
