@@ -402,3 +402,34 @@ def test_straight_line_with_an_offset_tool_keeps_the_tool_tip_on_the_line():
     assert np.linalg.norm(tips[0] - a.position()) < 1e-3 and np.linalg.norm(tips[-1] - b.position()) < 1e-3
     assert deviation(tips) < 0.1
     assert deviation(flanges) > 5.0
+
+
+def test_nonull_and_coarse_shorten_the_wait_at_a_break():
+    """BREAK waits for the position errors to be nulled within FINE; after a COARSE motion
+    within the looser COARSE band, after a NONULL motion not at all (V+ guide v17 "Robot
+    Speed": "The location tolerance settings (COARSE/FINE, NULL/NONULL)")."""
+    waits = {}
+    for modifier in ("FINE", "COARSE", "NONULL"):
+        text = _program("MOVE a", "BREAK", modifier, "MOVE b", "BREAK", "SIGNAL 1")
+        sim, _, outcome, rows = run_on_cell(text, locations={"a": A, "b": B})
+        assert outcome.errors == []
+        end = sim.controller.history[1].end_s
+        waits[modifier] = next(t for t, _, _, io, _ in rows if io.get(1)) - end
+    # The program sees the end of the motion at the next 16 ms cycle, the probe 16 ms later.
+    assert waits["NONULL"] <= 0.032 < waits["COARSE"] < waits["FINE"]
+
+
+def test_brake_stops_the_robot_on_its_path():
+    """BRAKE: the robot decelerates to a stop at once, short of its destination, and the
+    program goes on (V+ guide v17 L6458-6461)."""
+    far = Location(300.0, 150.0, 250.0, *DOWN)
+    program = _program("MOVE a", "BREAK", "SPEED 20", "MOVE b", "t0 = TIMER(1)", "WAIT TIMER(1) > t0 + 0.15",
+                       "BRAKE", "BREAK", "SIGNAL 1")
+    sim, _, outcome, rows = run_on_cell(program, locations={"a": A, "b": far})
+    assert outcome.errors == []
+    record = sim.controller.history[1]
+    on = next(t for t, _, _, io, _ in rows if io.get(1))
+    assert on < record.end_s - 0.1
+    here = sim.controller.here().position()
+    assert np.linalg.norm(here - far.position()) > 50.0
+    assert np.linalg.norm(sim.controller.destination().position() - here) < 0.05  # DEST: where it stopped

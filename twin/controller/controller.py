@@ -42,6 +42,7 @@ from .trajectory import Trajectory, plan_joint_move, plan_straight_move
 NULLING_TIMEOUT = -1003  # V+ "*Time-out nulling errors*" (V+ guide v17 L5832)
 COLLISION = -1020  # "*Collision detected*": twin-defined (the real controller does not see the cell)
 NULLING_TIMEOUT_S = 2.0  # how long the servos may take to settle after a move
+COARSE_FACTOR = 5.0  # COARSE tolerance / FINE tolerance (SPEC: "normally 2 to 10 times" FINE)
 TRAJECTORY_CYCLE_S = 0.016  # V+ trajectory generator period (62.5 Hz, V+ guide v17 "Timing Considerations")
 PLAN_CACHE = 64  # planned trajectories kept for reuse
 MM = 1000.0
@@ -60,6 +61,8 @@ class MotionParameters:
     duration_s: float  # minimum motion time (DURATION)
     cp: bool  # this motion may blend into the next one
     single: bool  # wrist within +/-180 deg (SINGLE)
+    coarse: bool  # COARSE: the looser end-of-motion tolerance
+    null: bool  # NULL: a stop waits for the position errors to be nulled
 
 
 @dataclass
@@ -81,6 +84,8 @@ class MotionSettings:
     duration_s: float = 0.0  # DURATION ... ALWAYS
     cp: bool = True  # CPON / CPOFF ALWAYS
     single: bool = False  # SINGLE / MULTIPLE ALWAYS
+    coarse: bool = False  # COARSE / FINE ALWAYS
+    null: bool = True  # NULL / NONULL ALWAYS
     next: dict = field(default_factory=dict)  # next-motion-only values, same keys
 
     def take(self, consume: bool = True) -> MotionParameters:
@@ -102,6 +107,8 @@ class MotionSettings:
             duration_s=once.get("duration_s", self.duration_s),
             cp=once.get("cp", self.cp),
             single=once.get("single", self.single),
+            coarse=once.get("coarse", self.coarse),
+            null=once.get("null", self.null),
         )
 
     def set(self, key: str, value, always: bool) -> None:
@@ -207,6 +214,7 @@ class VirtualController:
         self.fine = np.where(self.prismatic, 2e-5, 1e-4)
         self.history: list[MotionRecord] = []
         self._plans: dict[tuple, Trajectory] = {}
+        self._last_params: MotionParameters | None = None  # of the last motion launched
         self._t0 = cell.time  # simulated time of step 0
 
     # ------------------------------------------------------------ locations
@@ -286,8 +294,10 @@ class VirtualController:
     def set_duration(self, seconds: float, always: bool = False) -> None:
         self.settings.set("duration_s", max(float(seconds), 0.0), always)
 
-    def set_single(self, single: bool, always: bool = False) -> None:
-        self.settings.set("single", single, always)
+    def set_modifier(self, key: str, value: bool, always: bool = False) -> None:
+        """SINGLE/MULTIPLE ("single"), COARSE/FINE ("coarse"), NULL/NONULL ("null"),
+        CPON/CPOFF ("cp"): the next motion, or every motion with ALWAYS."""
+        self.settings.set(key, value, always)
 
     def request_configuration(self, righty: bool) -> None:
         """LEFTY / RIGHTY for the next motion (a SCARA's only configuration choice)."""
@@ -301,11 +311,12 @@ class VirtualController:
     def _motion_done(self) -> bool:
         return not self._motions
 
-    def stopped(self) -> bool:
-        """Every motion is over and every joint has settled within FINE."""
+    def stopped(self, tolerance: np.ndarray | None = None) -> bool:
+        """Every motion is over and every joint has settled within `tolerance` (FINE)."""
         if self._motions:
             return False
-        return bool(np.all(np.abs(self.cell.robot_qpos() - self.q_command) <= self.fine))
+        tolerance = self.fine if tolerance is None else tolerance
+        return bool(np.all(np.abs(self.cell.robot_qpos() - self.q_command) <= tolerance))
 
     # ------------------------------------------------------------ motion
     def move(self, target, straight: bool, cp: bool = True):
@@ -425,6 +436,7 @@ class VirtualController:
             overlap = min(last.decel_steps, motion.accel_steps) if cp and last.params.cp else 0
             start = max(start, last.end - overlap)
         motion.start = start
+        self._last_params = params
         overlap_s = (self._motions[-1].end - start) * self.dt if self._motions else 0.0
         self.history.append(MotionRecord(self._t0 + start * self.dt, self._t0 + motion.end * self.dt,
                                          trajectory.duration, max(overlap_s, 0.0), straight, destination))
@@ -435,14 +447,19 @@ class VirtualController:
             yield lambda: motion.started or motion not in self._motions
 
     def wait_stopped(self):
-        """BREAK: wait for every motion to finish and the joints to settle."""
+        """BREAK: wait for every motion to finish and, unless the last motion was NONULL, the
+        joints to settle within its tolerance (FINE, or COARSE: COARSE_FACTOR times looser)."""
         if self._motions:
             yield self._motion_done
-        if not self.stopped():
+        last = self._last_params
+        if last is not None and not last.null:
+            return
+        tolerance = self.fine * (COARSE_FACTOR if last is not None and last.coarse else 1.0)
+        if not self.stopped(tolerance):
             deadline = self.cell.time + NULLING_TIMEOUT_S
             cell = self.cell
-            yield lambda: self.stopped() or cell.time >= deadline
-            if not self.stopped():
+            yield lambda: self.stopped(tolerance) or cell.time >= deadline
+            if not self.stopped(tolerance):
                 raise ProgramError("*Time-out nulling errors*", NULLING_TIMEOUT)
 
     def set_tool(self, tool: Location):
@@ -458,7 +475,7 @@ class VirtualController:
         self._destination = self._location_of(self._q_planned)
 
     def stop(self) -> None:
-        """A program error: the robot decelerates to a stop on its path.  Motions not yet
+        """A program error or BRAKE: the robot decelerates to a stop on its path.  Motions not yet
         begun are dropped; one already in its final deceleration (as a motion is when the
         next one fails to plan) goes on to its destination; one at speed slows down along
         its path over its own deceleration time."""

@@ -111,7 +111,7 @@ def _duration(rt, seconds):
 
 @instruction("CPON", names=True)
 def _cpon(rt, *names):
-    rt.robot.settings.set("cp", True, _always(names))
+    rt.robot.set_modifier("cp", True, _always(names))
 
 
 @instruction("CPOFF", waits=True, names=True)
@@ -119,17 +119,25 @@ def _cpoff(rt, *names):
     """CPOFF breaks continuous path: it waits for the robot to stop (V+ guide v17 L6454)."""
     always = _always(names)
     yield from rt.robot.wait_stopped()
-    rt.robot.settings.set("cp", False, always)
+    rt.robot.set_modifier("cp", False, always)
 
 
-@instruction("SINGLE", names=True)
-def _single(rt, *names):
-    rt.robot.set_single(True, _always(names))
+def _modifier(name: str, key: str, value: bool) -> None:
+    """A motion modifier that takes ALWAYS (V+ guide v17, "Motion Modifiers")."""
+    instruction(name, names=True)(lambda rt, *names: rt.robot.set_modifier(key, value, _always(names)))
 
 
-@instruction("MULTIPLE", names=True)
-def _multiple(rt, *names):
-    rt.robot.set_single(False, _always(names))
+for _name, _key, _value in (("SINGLE", "single", True), ("MULTIPLE", "single", False),
+                            ("COARSE", "coarse", True), ("FINE", "coarse", False),
+                            ("NULL", "null", True), ("NONULL", "null", False)):
+    _modifier(_name, _key, _value)
+
+
+@instruction("BRAKE")
+def _brake(rt):
+    """BRAKE: the robot decelerates to a stop at once, on its path; the motion is over
+    (V+ guide v17 L6458-6461: "from any program task")."""
+    rt.robot.stop()
 
 
 @instruction("RIGHTY")
