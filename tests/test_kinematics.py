@@ -36,7 +36,7 @@ def test_model_data_read_from_the_mjcf(kin):
     assert np.allclose(kin.lower, [-1.8326, -2.618, 0, -6.2832])
     assert np.allclose(kin.upper, [1.8326, 2.618, 0.21, 6.2832])
     assert np.allclose(kin.max_velocity, [6.737, 12.566, 1.1, 20.944])
-    assert np.allclose(kin.max_acceleration, [60, 100, 22, 110])
+    assert np.allclose(kin.max_acceleration, [75, 125, 30, 110])
     s = kin.scara
     assert s is not None and s.l1 == pytest.approx(0.325) and s.l2 == pytest.approx(0.275)
 

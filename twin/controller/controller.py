@@ -42,6 +42,7 @@ from .trajectory import Trajectory, plan_joint_move, plan_straight_move
 NULLING_TIMEOUT = -1003  # V+ "*Time-out nulling errors*" (V+ guide v17 L5832)
 COLLISION = -1020  # "*Collision detected*": twin-defined (the real controller does not see the cell)
 NULLING_TIMEOUT_S = 2.0  # how long the servos may take to settle after a move
+BLEND_SLACK = 1.02  # blends may reach the joint limits within the planner's own tolerance
 COARSE_FACTOR = 5.0  # COARSE tolerance / FINE tolerance (SPEC: "normally 2 to 10 times" FINE)
 TRAJECTORY_CYCLE_S = 0.016  # V+ trajectory generator period (62.5 Hz, V+ guide v17 "Timing Considerations")
 PLAN_CACHE = 64  # planned trajectories kept for reuse
@@ -433,7 +434,10 @@ class VirtualController:
         start = self.step
         if self._motions:
             last = self._motions[-1]
-            overlap = min(last.decel_steps, motion.accel_steps) if cp and last.params.cp else 0
+            overlap = 0
+            if cp and last.params.cp:
+                longest = min(last.decel_steps, motion.accel_steps, max(last.end - self.step, 0))
+                overlap = self._blend_steps(last, motion, longest)
             start = max(start, last.end - overlap)
         motion.start = start
         self._last_params = params
@@ -445,6 +449,30 @@ class VirtualController:
         self._destination = destination
         if start > self.step:
             yield lambda: motion.started or motion not in self._motions
+
+    def _blend_steps(self, last: _Motion, new: _Motion, longest: int) -> int:
+        """The longest overlap, up to `longest` steps, for which the sum of the two motions
+        stays within every joint's speed and acceleration limits (those the motions were
+        planned with, slowed by the monitor speed like the motions themselves): the path
+        is rounded only as much as the accelerations allow (V+ Operating System Reference,
+        SPEED monitor command).  A joint that reverses between the two motions allows none."""
+        scale = new.params.time_scale
+        vmax = self.kin.max_velocity / scale * BLEND_SLACK
+        amax = self.kin.max_acceleration / (scale * scale) * BLEND_SLACK
+
+        def within(o: int) -> bool:
+            qd = last.qd[last.last - o:] + new.qd[:o + 1]
+            qdd = last.qdd[last.last - o:] + new.qdd[:o + 1]
+            return bool(np.all(np.abs(qd) <= vmax) and np.all(np.abs(qdd) <= amax))
+
+        lo, hi = 0, longest  # within(0) holds: one motion at rest, the other starting
+        while lo < hi:
+            mid = (lo + hi + 1) // 2
+            if within(mid):
+                lo = mid
+            else:
+                hi = mid - 1
+        return lo
 
     def wait_stopped(self):
         """BREAK: wait for every motion to finish and, unless the last motion was NONULL, the
