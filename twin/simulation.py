@@ -102,13 +102,17 @@ class Simulation:
     def _stop_for_collision(self, collision: dict) -> ProgramError | None:
         """The robot hit something: it stops where it is, and each running program stops with
         the error at the step it was executing (docs/motion.md, collision policy).  Returns
-        the error when no program was running to report it."""
+        the error when no program took it (none was running, or a task's generator does not
+        turn errors into its own report)."""
         self.controller.halt()
         text = f"*Collision detected* {collision['robot_geom']} with {collision['with']}"
-        running = [task for task in self.scheduler.tasks if not task.finished]
-        for task in running:
+        taken = False
+        for task in [task for task in self.scheduler.tasks if not task.finished]:
             try:
-                task.generator.throw(ProgramError(text, COLLISION))
+                task.generator.throw(ProgramError(text, COLLISION))  # one each: it gets located
+                taken = True
             except StopIteration:
-                pass
-        return None if running else ProgramError(text, COLLISION)
+                taken = True
+            except ProgramError:
+                task.finished = True
+        return None if taken else ProgramError(text, COLLISION)
