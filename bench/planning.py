@@ -1,6 +1,7 @@
 """Planning time per motion on the Cobra s600: MOVE (IK + joint-space toppra) and MOVES
 (straight line: waypoints by IK, spline, toppra with a TCP speed limit), ~50 random moves
-each, plus the cost of sampling a planned move at a 2 ms physics step.  Not a test.
+each, plus the cost of sampling a planned move at a 2 ms physics step; then the same two
+on the Cartesian gantry (damped least-squares IK).  Not a test.
 
     .venv/bin/python bench/planning.py [--moves 50] [--seed 0]
 """
@@ -18,6 +19,7 @@ from twin.controller.kinematics import KinematicsError, RobotKinematics
 from twin.controller.trajectory import plan_joint_move, plan_straight_move
 
 ROBOT = Path(__file__).resolve().parents[1] / "models" / "robots" / "cobra_s600.xml"
+GANTRY = ROBOT.with_name("cartesian_gantry.xml")
 
 
 def _random_q(kin, rng):
@@ -86,6 +88,26 @@ def main() -> None:
          f"motion median {statistics.median(durations_s):.3f} s; {rejected} random lines rejected")
     _row("MOVES 305 mm leg", np.diff(leg).tolist())
     _row("sample(0.002) of MOVE", sample_t)
+    _gantry(args.moves, rng)
+
+
+def _gantry(moves: int, rng) -> None:
+    kin = RobotKinematics.from_mjcf(GANTRY)
+    vmax, amax = kin.max_velocity, kin.max_acceleration
+    move_t, moves_t = [], []
+    for _ in range(moves):
+        q0, q1 = rng.uniform(kin.lower, kin.upper), rng.uniform(kin.lower, kin.upper)
+        q1[3] = q0[3] + rng.uniform(-2.0, 2.0)  # within the wrist range of the start
+        q1[3] = min(max(q1[3], kin.lower[3]), kin.upper[3])
+        T1 = kin.fk(q1)
+        t0 = time.perf_counter()
+        plan_joint_move(q0, kin.ik(T1, q0), vmax, amax)
+        move_t.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        plan_straight_move(kin, q0, T1, vmax, amax, 1.0)
+        moves_t.append(time.perf_counter() - t0)
+    _row("gantry MOVE", move_t)
+    _row("gantry MOVES", moves_t)
 
 
 if __name__ == "__main__":

@@ -36,7 +36,7 @@ def test_model_data_read_from_the_mjcf(kin):
     assert np.allclose(kin.lower, [-1.8326, -2.618, 0, -6.2832])
     assert np.allclose(kin.upper, [1.8326, 2.618, 0.21, 6.2832])
     assert np.allclose(kin.max_velocity, [6.737, 12.566, 1.1, 20.944])
-    assert np.allclose(kin.max_acceleration, [38, 70, 14, 110])
+    assert np.allclose(kin.max_acceleration, [75, 125, 30, 110])
     s = kin.scara
     assert s is not None and s.l1 == pytest.approx(0.325) and s.l2 == pytest.approx(0.275)
 
@@ -164,3 +164,39 @@ def test_joint_limits_are_reported_with_the_joint(kin):
     with pytest.raises(KinematicsError) as info:
         kin.ik(_pose(0.4, 0.1, 0.05, 0), np.zeros(4), righty=True)
     assert info.value.joint == 3
+
+
+def test_single_keeps_the_wrist_within_half_a_turn(kin):
+    """SINGLE: the wrist stays within +/-180 deg whatever the seed; MULTIPLE (the default)
+    takes the turn nearest the seed (V+ guide v17 "Motion Modifiers", SINGLE/MULTIPLE)."""
+    T = _pose(0.4, 0.0, 0.3, 10)
+    seed = np.array([0, 0.5, 0.1, 2 * np.pi])
+    assert kin.ik(T, seed, righty=True)[3] > np.pi
+    q = kin.ik(T, seed, righty=True, single=True)
+    assert -np.pi <= q[3] < np.pi
+    assert np.allclose(kin.fk(q), T, atol=1e-9)
+
+
+GANTRY = Path(__file__).resolve().parents[1] / "models" / "robots" / "cartesian_gantry.xml"
+
+
+def test_gantry_ik_round_trip_over_the_whole_workspace():
+    """The Cartesian robot (models/robots/cartesian_gantry.xml): every location of its
+    box-shaped workspace, several tool rolls, FK(IK(T)) = T within 0.01 mm; a location past
+    a stroke is out of range (-610)."""
+    gantry = RobotKinematics.from_mjcf(GANTRY)
+    assert gantry.scara is None and gantry.joint_names == ["x", "y", "z", "theta"]
+    seed = np.array([0.35, 0.4, 0.15, 0.0])
+    for x in np.linspace(0.0, 0.7, 8):
+        for y in np.linspace(0.0, 0.8, 8):
+            for z, roll in ((0.404, 180.0), (0.25, 45.0), (0.104, -100.0)):
+                T = _pose(x, y, z, roll)
+                q = gantry.ik(T, seed)
+                Tq = gantry.fk(q)
+                assert np.linalg.norm(Tq[:3, 3] - T[:3, 3]) < 1e-5
+                assert np.allclose(Tq[:3, :3], T[:3, :3], atol=1e-9)
+                assert q[:3] == pytest.approx([x, y, 0.404 - z], abs=1e-9)  # flange = joints
+    for x, y, z in ((0.75, 0.3, 0.2), (0.3, -0.02, 0.2), (0.3, 0.3, 0.09)):
+        with pytest.raises(KinematicsError) as info:
+            gantry.ik(_pose(x, y, z, 180.0), seed)
+        assert info.value.code == LOCATION_OUT_OF_RANGE

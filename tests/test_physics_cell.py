@@ -13,7 +13,7 @@ import pinocchio as pin
 import pytest
 
 from twin.physics.cell import Cell
-from twin.physics.geometry import flange_ik, vplus_to_matrix
+from twin.physics.geometry import vplus_to_matrix
 from twin.physics.scene import load_scene
 
 REPO = Path(__file__).resolve().parent.parent
@@ -35,8 +35,7 @@ class Driver:
         with a flange pointing down)."""
         loc = list(self.cell.locations()[name])
         loc[2] += up_mm
-        T = self.cell.robot_base_pose() @ vplus_to_matrix(loc)
-        return flange_ik(self.cell.model, T, self.cell.robot_joint_names, q0=self.q, righty=True)
+        return self.cell.kinematics.ik(vplus_to_matrix(loc), self.q, righty=True)
 
     def move(self, q1: np.ndarray, duration: float) -> None:
         dt = self.cell.timestep
@@ -242,8 +241,7 @@ def test_opening_mid_air_over_the_table_drops_the_part(cell: Cell):
     assert pid is not None
     # Swing out over bare table, well above it, and let go.
     loc = [450.0, -250.0, 300.0, 0.0, 180.0, 180.0]
-    q = flange_ik(cell.model, cell.robot_base_pose() @ vplus_to_matrix(loc), cell.robot_joint_names,
-                  q0=drv.q)
+    q = cell.kinematics.ik(vplus_to_matrix(loc), drv.q)
     drv.move(q, 0.5)
     cell.set_gripper(False)
     drv.wait(1.0)
@@ -255,7 +253,7 @@ def test_opening_mid_air_over_the_table_drops_the_part(cell: Cell):
 
 
 def test_slip_releases_the_part_when_the_grip_is_too_weak(cell: Cell):
-    """With the jaw force cut to almost nothing, the weld's load exceeds 2*mu*F: slip."""
+    """With the jaw force cut to almost nothing, the net load the gripper carries exceeds 2*mu*F: slip."""
     drv = Driver(cell)
     drv.wait_for_part()
     drv.pick()

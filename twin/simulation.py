@@ -13,9 +13,8 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .controller.controller import MotionSettings, VirtualController
+from .controller.controller import COLLISION, MotionSettings, VirtualController
 from .controller.io import DigitalIO
-from .controller.kinematics import RobotKinematics
 from .controller.location import Location
 from .controller.scheduler import Scheduler
 from .errors import ProgramError
@@ -40,8 +39,7 @@ class Simulation:
     def __init__(self, scene: str | Path = DEFAULT_SCENE, seed: int | None = None, recorder=None):
         self.scene_path = Path(scene)
         self.cell = Cell.from_scene(self.scene_path, seed=seed)
-        robot = self.cell.scene["robot"]
-        self.kinematics = RobotKinematics.from_mjcf(_resolve(robot["model"], self.scene_path))
+        self.kinematics = self.cell.kinematics
         controller_cfg = self.cell.scene.get("controller", {})
         settings = MotionSettings(
             monitor_speed=float(controller_cfg.get("monitor_speed", MotionSettings.monitor_speed)),
@@ -68,6 +66,7 @@ class Simulation:
         steps = max(1, round(MAJOR_CYCLE_S / cell.timestep))
         errors: list[dict] = []
         program_end = None
+        crashed = False
         while True:
             if program_end is None:
                 scheduler.run_cycle()
@@ -90,15 +89,30 @@ class Simulation:
             for _ in range(steps):
                 controller.servo_step()
                 cell.step(1)
+            collisions = cell.take_collisions()
+            if collisions and not crashed:  # the first one stops everything; all are events
+                crashed = True
+                error = self._stop_for_collision(collisions[0])
+                if error is not None:  # no program was running to take it
+                    errors.append(error.as_dict(cell.time))
             if self.recorder is not None and self.recorder.wants_frame(cell.time):
                 self.recorder.sample(cell.time, cell.data)
         return RunOutcome(cell.time, time.perf_counter() - wall_start, program_end, errors)
 
-
-def _resolve(path: str, scene_path: Path) -> Path:
-    """Model paths in a scene are relative to the repository or to the scene file."""
-    for base in (scene_path.parent, REPO_ROOT):
-        candidate = (base / path).resolve()
-        if candidate.exists():
-            return candidate
-    return Path(path)
+    def _stop_for_collision(self, collision: dict) -> ProgramError | None:
+        """The robot hit something: it stops where it is, and each running program stops with
+        the error at the step it was executing (docs/motion.md, collision policy).  Returns
+        the error when no program took it (none was running, or a task's generator does not
+        turn errors into its own report)."""
+        self.controller.halt()
+        text = f"*Collision detected* {collision['robot_geom']} with {collision['with']}"
+        taken = False
+        for task in [task for task in self.scheduler.tasks if not task.finished]:
+            try:
+                task.generator.throw(ProgramError(text, COLLISION))  # one each: it gets located
+                taken = True
+            except StopIteration:
+                taken = True
+            except ProgramError:
+                task.finished = True
+        return None if taken else ProgramError(text, COLLISION)

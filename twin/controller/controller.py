@@ -1,66 +1,194 @@
-"""The virtual robot controller: motion queue, trajectory execution, hand.
+"""The virtual robot controller: motion queue, continuous path, trajectory execution, hand.
 
 Both languages drive the robot through this class.  It owns what the real
-controller owns: the commanded destination, the arm configuration request,
-the speed settings, the hand valves, and the servo references fed to the
-MuJoCo cell every physics step.
+controller owns: the commanded destination, the arm configuration request, the
+speed, acceleration and tolerance settings, TOOL and BASE, the hand valves, and
+the servo references fed to the MuJoCo cell every physics step.
 
-Forward processing (V+ guide v17, "Robot Motion"): a motion instruction
-starts the move and the program goes on at once; the next motion instruction
-waits until the move in progress is done.  Instructions that must see the
-robot stopped (BREAK, OPENI, CLOSEI) wait until the joints have settled
-within the FINE tolerance, and report "*Time-out nulling errors*" when they
-never do.  The blocking methods are generators that yield wait conditions to
-the task scheduler.
+Forward processing and continuous path (V+ guide v17, "Motion Control
+Instructions", "Continuous-Path Trajectories", "Robot Speed"; docs/motion.md):
+
+* a motion instruction plans its motion, waits until the motion *begins*, and the
+  program goes on (SIGNAL 1 after MOVE part.1 turns on just after the robot starts);
+* the next motion instruction waits until the motion in progress enters its
+  deceleration phase (CP on) or is over (CP off), then plans its own;
+* with CP on, the new motion starts while the previous one decelerates, so that
+  the end of the previous deceleration coincides with the end of the new
+  acceleration (the overlap is the shorter of the two phases): the two
+  trajectories are superposed in joint space.  The blend is confined to those
+  phases, so the robot never leaves a segment before it has started to slow down
+  for its end point;
+* instructions that must see the robot stopped (BREAK, OPENI, CLOSEI, RELAXI,
+  CPOFF, TOOL, BASE) wait until every motion is over and the joints have settled
+  within the FINE tolerance ("*Time-out nulling errors*" when they never do).
+
+The blocking methods are generators that yield wait conditions to the task
+scheduler.  Locations are in the world frame of the program (mm, degrees); the
+robot's flange is at ``BASE : location : INVERSE(TOOL)`` in the robot base frame.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..errors import ProgramError
 from .kinematics import KinematicsError, RobotKinematics
-from .location import Location
+from .location import NULL, Location
 from .trajectory import Trajectory, plan_joint_move, plan_straight_move
 
 NULLING_TIMEOUT = -1003  # V+ "*Time-out nulling errors*" (V+ guide v17 L5832)
+COLLISION = -1020  # "*Collision detected*": twin-defined (the real controller does not see the cell)
 NULLING_TIMEOUT_S = 2.0  # how long the servos may take to settle after a move
+BLEND_SLACK = 1.02  # blends may reach the joint limits within the planner's own tolerance
+COARSE_FACTOR = 5.0  # COARSE tolerance / FINE tolerance (SPEC: "normally 2 to 10 times" FINE)
+TRAJECTORY_CYCLE_S = 0.016  # V+ trajectory generator period (62.5 Hz, V+ guide v17 "Timing Considerations")
+PLAN_CACHE = 64  # planned trajectories kept for reuse
 MM = 1000.0
+MM_PER_INCH = 25.4
+
+
+@dataclass
+class MotionParameters:
+    """What one motion is planned with, after the SPEED/ACCEL/DURATION/CP/SINGLE settings."""
+
+    joint_speed: float  # fraction of each joint's maximum speed (program speed)
+    cartesian_speed_m_s: float  # straight-line tool speed limit (program speed)
+    time_scale: float  # 100 / monitor speed: the planned motion is slowed down by this
+    accel: float  # fraction of the maximum acceleration while speeding up
+    decel: float  # ... while slowing down
+    duration_s: float  # minimum motion time (DURATION)
+    cp: bool  # this motion may blend into the next one
+    single: bool  # wrist within +/-180 deg (SINGLE)
+    coarse: bool  # COARSE: the looser end-of-motion tolerance
+    null: bool  # NULL: a stop waits for the position errors to be nulled
 
 
 @dataclass
 class MotionSettings:
-    """Speed settings as V+ keeps them (V+ guide v17, "Speed, Acceleration")."""
+    """Motion settings as V+ keeps them (V+ guide v17, "Robot Speed", "Motion Modifiers").
+
+    Settings given without ALWAYS apply to the next motion only (`next`); with ALWAYS
+    they replace the permanent value.  The program speed sets the speed a motion is
+    planned for, the accelerations staying as they are; the monitor speed then slows the
+    whole planned motion down, path unchanged, every phase taking 100/monitor times as
+    long (V+ Operating System Reference Guide, SPEED monitor command, "Details")."""
 
     monitor_speed: float = 50.0  # % ; 50 at controller start-up
     program_speed: float = 100.0  # % ; 100 when a program starts
-    next_speed: float | None = None  # SPEED without ALWAYS: the next motion only
     cartesian_speed_mm_s: float = 1000.0  # straight-line tool speed at 100 %
+    absolute_speed_mm_s: float | None = None  # SPEED v MMPS|IPS ALWAYS: straight-line tool speed
+    accel: float = 100.0  # ACCEL, % of the maximum acceleration
+    decel: float = 100.0  # ACCEL's second argument, % of the maximum deceleration
+    duration_s: float = 0.0  # DURATION ... ALWAYS
+    cp: bool = True  # CPON / CPOFF ALWAYS
+    single: bool = False  # SINGLE / MULTIPLE ALWAYS
+    coarse: bool = False  # COARSE / FINE ALWAYS
+    null: bool = True  # NULL / NONULL ALWAYS
+    next: dict = field(default_factory=dict)  # next-motion-only values, same keys
 
-    def take(self) -> float:
-        """Effective speed fraction for the motion about to start."""
-        program = self.next_speed if self.next_speed is not None else self.program_speed
-        self.next_speed = None
-        return max(program * self.monitor_speed / 1e4, 1e-3)
+    def take(self, consume: bool = True) -> MotionParameters:
+        """The parameters of the motion about to be planned; next-motion values are used up
+        unless `consume` is false."""
+        once = self.next
+        if consume:
+            self.next = {}
+        speed = min(max(once.get("program_speed", self.program_speed) / 100.0, 1e-3), 1.0)
+        absolute = once.get("absolute_speed_mm_s", None if "program_speed" in once else self.absolute_speed_mm_s)
+        # An absolute speed is reached only at monitor speed 100 (V+ guide v17, "Robot Speed").
+        cartesian = absolute if absolute is not None else self.cartesian_speed_mm_s * speed
+        return MotionParameters(
+            joint_speed=speed,
+            cartesian_speed_m_s=max(cartesian, 1e-3) / MM,
+            time_scale=100.0 / min(max(self.monitor_speed, 0.1), 100.0),
+            accel=self.accel / 100.0,
+            decel=self.decel / 100.0,
+            duration_s=once.get("duration_s", self.duration_s),
+            cp=once.get("cp", self.cp),
+            single=once.get("single", self.single),
+            coarse=once.get("coarse", self.coarse),
+            null=once.get("null", self.null),
+        )
 
-
-class _Segment:
-    """A trajectory sampled at the physics step, played back one step at a time."""
-
-    def __init__(self, trajectory: Trajectory | None, dt: float, hold: np.ndarray, dwell_s: float = 0.0):
-        if trajectory is not None and trajectory.duration > 0:
-            _, self.q, self.qd = trajectory.sample(dt)
+    def set(self, key: str, value, always: bool) -> None:
+        if always:
+            setattr(self, key, value)
+            self.next.pop(key, None)
         else:
-            steps = max(int(round(dwell_s / dt)), 1)
-            self.q = np.repeat(hold[None, :], steps, axis=0)
-            self.qd = np.zeros_like(self.q)
-        self.k = 0
+            self.next[key] = value
+
+
+@dataclass(frozen=True)
+class MotionRecord:
+    """One motion as the controller executed it: for reports, tests and benchmarks."""
+
+    start_s: float  # simulated time the motion began
+    end_s: float  # simulated time its last reference was commanded (the destination, at rest)
+    duration_s: float  # planned duration: toppra's, slowed by the monitor speed and DURATION
+    overlap_s: float  # how long it ran blended with the motion before it
+    straight: bool
+    destination: Location
+
+
+class _Motion:
+    """One planned motion on the controller's timeline of physics steps.
+
+    Sample k of the trajectory is commanded at step ``start + k``; ``end`` is the step of
+    the last sample (the destination, at rest).  ``decel_from`` is the first step of the
+    final deceleration, ``accel_steps`` the length of the acceleration phase."""
+
+    def __init__(self, trajectory: Trajectory, dt: float, params: MotionParameters,
+                 destination: Location, hand: str | None):
+        _, self.q, self.qd = trajectory.sample(dt)
+        self.dt = dt
+        self.delta = self.q - self.q[0]  # what this motion adds to the reference
+        self.qdd = self._acceleration()
+        self.last = len(self.q) - 1  # index of the last sample
+        self.params = params
+        self.destination = destination
+        self.hand = hand
+        self.accel_steps = int(round(trajectory.accel_time / dt))
+        self.decel_steps = int(round(trajectory.decel_time / dt))
+        self.start = 0
+        self.started = False
 
     @property
-    def done(self) -> bool:
-        return self.k >= len(self.q)
+    def end(self) -> int:
+        return self.start + self.last
+
+    def brake(self, k: int, slack: int) -> None:
+        """From sample k on, slow the playback down linearly to rest over the motion's
+        deceleration time: the robot stops on the same path (unless it arrives first).  A
+        motion within `slack` steps of its deceleration is left to finish."""
+        last = len(self.q) - 1
+        steps = max(self.decel_steps, 1)
+        if k >= last - self.decel_steps - slack:
+            return
+        t = np.arange(steps + 1, dtype=float)
+        u = np.minimum(k + t - t * t / (2 * steps), last)  # fractional sample index
+        rate = 1.0 - t / steps
+        i = np.minimum(np.floor(u).astype(int), last - 1)
+        w = (u - i)[:, None]
+        q = (1 - w) * self.q[i] + w * self.q[i + 1]
+        qd = ((1 - w) * self.qd[i] + w * self.qd[i + 1]) * rate[:, None]
+        self.q = np.concatenate([self.q[:k], q])
+        self.qd = np.concatenate([self.qd[:k], qd])
+        self.delta = self.q - self.q[0]
+        self.qdd = self._acceleration()
+        self.last = len(self.q) - 1
+
+    def _acceleration(self) -> np.ndarray:
+        """Reference accelerations at the samples (for the servos' feed-forward); none at the
+        last sample, where the motion is over."""
+        qdd = np.zeros_like(self.qd) if len(self.qd) < 2 else np.gradient(self.qd, self.dt, axis=0)
+        qdd[-1] = 0.0
+        return qdd
+
+    @property
+    def decel_from(self) -> int:
+        return self.end - self.decel_steps
 
 
 class VirtualController:
@@ -71,29 +199,46 @@ class VirtualController:
         self.kin = kinematics
         self.settings = settings or MotionSettings()
         self.dt = cell.timestep
+        self.lookahead = max(1, int(round(TRAJECTORY_CYCLE_S / self.dt)))
+        self.step = 0  # index of the next physics step to command
         self.q_command = np.array(cell.robot_qpos(), dtype=float)
+        self._anchor = self.q_command.copy()  # reference before the motions on the timeline
+        self._motions: list[_Motion] = []  # started or about to start, in time order
+        self._q_planned = self.q_command.copy()  # joints at the end of the last planned motion
+        self.tool = NULL
+        self.base = NULL
         self._destination = self._location_of(self.q_command)
-        self._segment: _Segment | None = None
         self._righty_request: bool | None = None
         self._hand_request: str | None = None
-        self._segment_end_time = cell.time
+        self.prismatic = np.array([cell.model.joint(n).type == 2 for n in cell.robot_joint_names])
         # FINE tolerance per joint, in joint units (rad or m).
-        self.fine = np.where(self._is_prismatic(), 2e-5, 1e-4)
-        self.moves = 0
-
-    def _is_prismatic(self) -> np.ndarray:
-        names = self.kin.joint_names
-        return np.array([self.cell.model.joint(n).type == 2 for n in names])
+        self.fine = np.where(self.prismatic, 2e-5, 1e-4)
+        self.history: list[MotionRecord] = []
+        self._plans: dict[tuple, Trajectory] = {}
+        self._last_params: MotionParameters | None = None  # of the last motion launched
+        self._t0 = cell.time  # simulated time of step 0
 
     # ------------------------------------------------------------ locations
+    def _flange_matrix_m(self, location: Location) -> np.ndarray:
+        """Flange pose in the robot base frame (metres) for a program location."""
+        T = (self.base * location * self.tool.inverse()).matrix()
+        T[:3, 3] /= MM
+        return T
+
+    def _tip_matrix_m(self, location: Location) -> np.ndarray:
+        """Tool-tip pose in the robot base frame (metres)."""
+        T = (self.base * location).matrix()
+        T[:3, 3] /= MM
+        return T
+
     def _location_of(self, q: np.ndarray) -> Location:
+        """Program location of the tool tip for joints q: INVERSE(BASE) : FK(q) : TOOL."""
         T = self.kin.fk(q).copy()
         T[:3, 3] *= MM
-        return Location.from_matrix(T)
+        return self.base.inverse() * Location.from_matrix(T) * self.tool
 
-    @staticmethod
-    def _matrix_m(location: Location) -> np.ndarray:
-        T = location.matrix().copy()
+    def _tool_m(self) -> np.ndarray:
+        T = self.tool.matrix()
         T[:3, 3] /= MM
         return T
 
@@ -106,98 +251,309 @@ class VirtualController:
         return self._location_of(self.cell.robot_qpos())
 
     def joints(self) -> np.ndarray:
+        """#PHERE: measured joints (SI)."""
         return self.cell.robot_qpos()
+
+    def location_of_joints(self, values) -> Location:
+        """The location a precision point (joint values, degrees and mm) puts the tool tip at."""
+        return self._location_of(self.from_user_joints(values))
+
+    def to_user_joints(self, q: np.ndarray) -> tuple[float, ...]:
+        """Joint values as V+ shows them: degrees for revolute joints, mm for prismatic."""
+        return tuple(float(v * MM if p else math.degrees(v)) for v, p in zip(q, self.prismatic))
+
+    def from_user_joints(self, values) -> np.ndarray:
+        values = [float(v) for v in values]
+        if len(values) != self.kin.dof:
+            raise ProgramError(f"*Invalid argument* precision point has {len(values)} joints, "
+                               f"the robot {self.kin.dof}", -407)
+        return np.array([v / MM if p else math.radians(v) for v, p in zip(values, self.prismatic)])
 
     # ------------------------------------------------------------ settings
     def set_speed(self, value: float, always: bool = False, monitor: bool = False, units: str | None = None):
+        """SPEED v [MMPS|IPS] [ALWAYS] / SPEED v MONITOR."""
         if monitor:
             self.settings.monitor_speed = value
-        elif always:
-            self.settings.program_speed = value
+        elif units is not None:
+            mm_s = value * (MM_PER_INCH if units == "IPS" else 1.0)
+            self.settings.set("absolute_speed_mm_s", mm_s, always)
         else:
-            self.settings.next_speed = value
+            self.settings.set("program_speed", value, always)
+            if always:
+                self.settings.absolute_speed_mm_s = None
 
     def speed(self, select: int = 1) -> float:
         return self.settings.monitor_speed if select == 0 else self.settings.program_speed
 
+    def set_accel(self, accel: float | None, decel: float | None) -> None:
+        """ACCEL acc, dec: percentages of the maximum, at most 100 (the SPEC maximum)."""
+        if accel is not None:
+            self.settings.accel = min(max(float(accel), 1.0), 100.0)
+        if decel is not None:
+            self.settings.decel = min(max(float(decel), 1.0), 100.0)
+
+    def set_duration(self, seconds: float, always: bool = False) -> None:
+        self.settings.set("duration_s", max(float(seconds), 0.0), always)
+
+    def set_modifier(self, key: str, value: bool, always: bool = False) -> None:
+        """SINGLE/MULTIPLE ("single"), COARSE/FINE ("coarse"), NULL/NONULL ("null"),
+        CPON/CPOFF ("cp"): the next motion, or every motion with ALWAYS."""
+        self.settings.set(key, value, always)
+
     def request_configuration(self, righty: bool) -> None:
+        """LEFTY / RIGHTY for the next motion (a SCARA's only configuration choice)."""
         self._righty_request = righty
 
-    # ------------------------------------------------------------ motion
+    # ------------------------------------------------------------ state
     @property
     def moving(self) -> bool:
-        return self._segment is not None
+        return bool(self._motions)
 
     def _motion_done(self) -> bool:
-        return self._segment is None
+        return not self._motions
 
-    def stopped(self) -> bool:
-        """The motion is over and every joint has settled within FINE."""
-        if self._segment is not None:
+    def stopped(self, tolerance: np.ndarray | None = None) -> bool:
+        """Every motion is over and every joint has settled within `tolerance` (FINE)."""
+        if self._motions:
             return False
-        return bool(np.all(np.abs(self.cell.robot_qpos() - self.q_command) <= self.fine))
+        tolerance = self.fine if tolerance is None else tolerance
+        return bool(np.all(np.abs(self.cell.robot_qpos() - self.q_command) <= tolerance))
 
-    def move(self, target: Location, straight: bool):
-        """Start a motion to `target` once the motion in progress is done."""
-        if self._segment is not None:
-            yield self._motion_done
-        speed = self.settings.take()
-        q0 = self.q_command
+    # ------------------------------------------------------------ motion
+    def move(self, target, straight: bool, cp: bool = True):
+        """Plan and start a motion to `target` (a Location, or joint values in V+ units for a
+        precision point), after the motion in progress has reached its blend point.
+        `cp` is the state of the CP switch."""
+        yield from self._wait_for_queue(cp)
+        params = self.settings.take()
+        righty, self._righty_request = self._righty_request, None
+        q0 = self._q_planned
         try:
-            if straight:
-                trajectory = plan_straight_move(
-                    self.kin, q0, self._matrix_m(target), self.kin.max_velocity, self.kin.max_acceleration,
-                    self.settings.cartesian_speed_mm_s * speed / MM,
-                )
+            if isinstance(target, Location):
+                if straight:
+                    tip, tool = self._tip_matrix_m(target), self._tool_m()
+                    trajectory = self._cached(
+                        ("S", q0.tobytes(), tip.tobytes(), tool.tobytes(), righty, params.cartesian_speed_m_s,
+                         params.accel, params.decel),
+                        lambda: plan_straight_move(self.kin, q0, tip, self.kin.max_velocity,
+                                                   self.kin.max_acceleration, params.cartesian_speed_m_s,
+                                                   righty=righty, accel=params.accel, decel=params.decel,
+                                                   tool=tool))
+                else:
+                    q1 = self.kin.ik(self._flange_matrix_m(target), q0, righty=righty, single=params.single)
+                    trajectory = self._joint_trajectory(q0, q1, params)
+                destination = target
             else:
-                q1 = self.kin.ik(self._matrix_m(target), q0, righty=self._righty_request)
-                self._righty_request = None
-                trajectory = plan_joint_move(q0, q1, self.kin.max_velocity * speed, self.kin.max_acceleration)
+                q1 = self.from_user_joints(target)
+                self.kin.check_limits(q1)
+                trajectory = self._joint_trajectory(q0, q1, params)
+                destination = self._location_of(q1)
         except KinematicsError as err:
             raise ProgramError(err.message, err.code) from None
-        self._start(_Segment(trajectory, self.dt, q0))
-        self._destination = target
+        yield from self._launch(_timed(trajectory, params), params, destination, cp,
+                                straight and isinstance(target, Location))
+
+    def drive(self, joint: int, change: float, speed: float, cp: bool = True):
+        """DRIVE joint, change, speed: joint `joint` (1-based) by `change` (deg or mm) at
+        `speed` % of normal speed (times the monitor speed), from the last destination."""
+        if not 1 <= joint <= self.kin.dof:
+            raise ProgramError(f"*Invalid argument* DRIVE joint {joint}", -407)
+        yield from self._wait_for_queue(cp)
+        self.settings.next["program_speed"] = float(speed)
+        params = self.settings.take()
+        q1 = self._q_planned.copy()
+        j = joint - 1
+        q1[j] += change / MM if self.prismatic[j] else math.radians(change)
+        try:
+            self.kin.check_limits(q1)
+        except KinematicsError as err:
+            raise ProgramError(err.message, err.code) from None
+        trajectory = self._joint_trajectory(self._q_planned, q1, params)
+        yield from self._launch(_timed(trajectory, params), params, self._location_of(q1), cp)
+
+    def _joint_trajectory(self, q0, q1, params: MotionParameters) -> Trajectory:
+        return self._cached(
+            ("J", q0.tobytes(), q1.tobytes(), params.joint_speed, params.accel, params.decel),
+            lambda: plan_joint_move(q0, q1, self.kin.max_velocity * params.joint_speed,
+                                    self.kin.max_acceleration, accel=params.accel, decel=params.decel))
+
+    def _cached(self, key: tuple, plan) -> Trajectory:
+        """A cyclic program asks for the same motions, from the same joints, over and over:
+        planning is deterministic, so a plan is computed once (most recent PLAN_CACHE kept)."""
+        trajectory = self._plans.pop(key, None)
+        if trajectory is None:
+            trajectory = plan()
+            if len(self._plans) >= PLAN_CACHE:
+                self._plans.pop(next(iter(self._plans)))
+        self._plans[key] = trajectory
+        return trajectory
+
+    def aligned(self) -> Location:
+        """ALIGN's destination: the last destination with its tool Z turned onto the nearest
+        world axis (the smallest rotation that does it)."""
+        loc = self._destination
+        R = loc.rotation()
+        z = R[:, 2]
+        axis = np.zeros(3)
+        k = int(np.argmax(np.abs(z)))
+        axis[k] = math.copysign(1.0, z[k])
+        v = np.cross(z, axis)
+        c = float(z @ axis)
+        if np.linalg.norm(v) < 1e-12:
+            return loc
+        vx = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+        turn = np.eye(3) + vx + vx @ vx / (1.0 + c)
+        T = loc.matrix()
+        T[:3, :3] = turn @ R
+        return Location.from_matrix(T)
 
     def dwell(self, seconds: float):
-        """DELAY: a motion that stands still for `seconds`."""
-        if self._segment is not None:
-            yield self._motion_done
-        self._start(_Segment(None, self.dt, self.q_command, dwell_s=seconds))
+        """DELAY: a motion that stands still for `seconds` (the robot stops before it)."""
+        yield from self._wait_for_queue(cp=False)
+        trajectory = _Still(self._q_planned, max(float(seconds), self.dt))
+        # Standing still leaves the next-motion settings (SPEED without ALWAYS...) to the next
+        # real motion.
+        yield from self._launch(trajectory, self.settings.take(consume=False), self._destination, cp=False)
 
-    def _start(self, segment: _Segment) -> None:
-        if self._hand_request is not None:
-            self.hand(self._hand_request)
-            self._hand_request = None
-        self._segment = segment
-        self.moves += 1
+    def _wait_for_queue(self, cp: bool):
+        """Wait until the last motion on the timeline is in its deceleration (blend possible)
+        or, without continuous path, over."""
+        if not self._motions:
+            return
+        last = self._motions[-1]
+        if cp and last.params.cp:
+            yield lambda: self.step + self.lookahead >= last.decel_from or not self._motions
+        else:
+            yield self._motion_done
+
+    def _launch(self, trajectory, params: MotionParameters, destination: Location, cp: bool,
+                straight: bool = False):
+        """Put a planned motion on the timeline and wait until it begins."""
+        motion = _Motion(trajectory, self.dt, params, destination, self._hand_request)
+        self._hand_request = None
+        start = self.step
+        if self._motions:
+            last = self._motions[-1]
+            overlap = 0
+            if cp and last.params.cp:
+                longest = min(last.decel_steps, motion.accel_steps, max(last.end - self.step, 0))
+                overlap = self._blend_steps(last, motion, longest)
+            start = max(start, last.end - overlap)
+        motion.start = start
+        self._last_params = params
+        overlap_s = (self._motions[-1].end - start) * self.dt if self._motions else 0.0
+        self.history.append(MotionRecord(self._t0 + start * self.dt, self._t0 + motion.end * self.dt,
+                                         trajectory.duration, max(overlap_s, 0.0), straight, destination))
+        self._motions.append(motion)
+        self._q_planned = motion.q[-1].copy()
+        self._destination = destination
+        if start > self.step:
+            yield lambda: motion.started or motion not in self._motions
+
+    def _blend_steps(self, last: _Motion, new: _Motion, longest: int) -> int:
+        """The longest overlap, up to `longest` steps, for which the sum of the two motions
+        stays within every joint's speed and acceleration limits (those the motions were
+        planned with, slowed by the monitor speed like the motions themselves): the path
+        is rounded only as much as the accelerations allow (V+ Operating System Reference,
+        SPEED monitor command).  A joint that reverses between the two motions allows none."""
+        scale = new.params.time_scale
+        vmax = self.kin.max_velocity / scale * BLEND_SLACK
+        amax = self.kin.max_acceleration / (scale * scale) * BLEND_SLACK
+
+        def within(o: int) -> bool:
+            qd = last.qd[last.last - o:] + new.qd[:o + 1]
+            qdd = last.qdd[last.last - o:] + new.qdd[:o + 1]
+            return bool(np.all(np.abs(qd) <= vmax) and np.all(np.abs(qdd) <= amax))
+
+        lo, hi = 0, longest  # within(0) holds: one motion at rest, the other starting
+        while lo < hi:
+            mid = (lo + hi + 1) // 2
+            if within(mid):
+                lo = mid
+            else:
+                hi = mid - 1
+        return lo
 
     def wait_stopped(self):
-        """BREAK: wait for the motion to finish and the joints to settle."""
-        if self._segment is not None:
+        """BREAK: wait for every motion to finish and, unless the last motion was NONULL, the
+        joints to settle within its tolerance (FINE, or COARSE: COARSE_FACTOR times looser)."""
+        if self._motions:
             yield self._motion_done
-        if not self.stopped():
+        last = self._last_params
+        if last is not None and not last.null:
+            return
+        tolerance = self.fine * (COARSE_FACTOR if last is not None and last.coarse else 1.0)
+        if not self.stopped(tolerance):
             deadline = self.cell.time + NULLING_TIMEOUT_S
             cell = self.cell
-            yield lambda: self.stopped() or cell.time >= deadline
-            if not self.stopped():
+            yield lambda: self.stopped(tolerance) or cell.time >= deadline
+            if not self.stopped(tolerance):
                 raise ProgramError("*Time-out nulling errors*", NULLING_TIMEOUT)
 
+    def set_tool(self, tool: Location):
+        """TOOL t: waits for the robot to stop, then locations refer to the new tool tip."""
+        yield from self.wait_stopped()
+        self.tool = tool
+        self._destination = self._location_of(self._q_planned)
+
+    def set_base(self, base: Location):
+        """BASE: waits for the robot to stop, then the world frame is `base` in the robot frame."""
+        yield from self.wait_stopped()
+        self.base = base
+        self._destination = self._location_of(self._q_planned)
+
     def stop(self) -> None:
-        """Stop at once (program error, abort): hold the present command."""
-        self._segment = None
+        """A program error or BRAKE: the robot decelerates to a stop on its path.  Motions not yet
+        begun are dropped; one already in its final deceleration (as a motion is when the
+        next one fails to plan) goes on to its destination; one at speed slows down along
+        its path over its own deceleration time."""
+        self._motions = [m for m in self._motions if m.started]
+        for m in self._motions:
+            m.brake(self.step - m.start, self.lookahead)
+        self._q_planned = self._anchor + sum((m.delta[-1] for m in self._motions), np.zeros_like(self._anchor))
+        self._destination = self._location_of(self._q_planned)
+
+    def halt(self) -> None:
+        """Stop at once where the robot is (a crash): every motion dropped, the servos hold
+        the measured position."""
+        q = self.cell.robot_qpos()
+        self._motions = []
+        self._anchor = q.copy()
+        self._q_planned = q.copy()
+        self.q_command = q.copy()
+        self._destination = self._location_of(q)
+        self.cell.set_servo(q, np.zeros_like(q))
 
     def servo_step(self) -> None:
-        """Feed this physics step's references to the servos."""
-        segment = self._segment
-        if segment is None:
+        """Feed this physics step's references to the servos: the superposition of the
+        motions on the timeline (two only while they blend)."""
+        motions = self._motions
+        n = self.step
+        self.step = n + 1
+        if not motions:
             return
-        k = segment.k
-        self.q_command = segment.q[k]
-        self.cell.set_servo(self.q_command, segment.qd[k])
-        segment.k = k + 1
-        if segment.done:
-            self.cell.set_servo(self.q_command, np.zeros_like(self.q_command))
-            self._segment = None
+        q, qd, qdd = self._anchor, None, None
+        for m in motions:
+            k = n - m.start
+            if k < 0:
+                continue
+            if not m.started:
+                m.started = True
+                if m.hand is not None:
+                    self.hand(m.hand)
+            k = min(k, m.last)
+            if qd is None:
+                q, qd, qdd = q + m.delta[k], m.qd[k], m.qdd[k]
+            else:
+                q, qd, qdd = q + m.delta[k], qd + m.qd[k], qdd + m.qdd[k]
+        if qd is not None:
+            self.q_command = q
+            self.cell.set_servo(q, qd, qdd)
+        while motions and motions[0].end <= n:
+            self._anchor = self._anchor + motions[0].delta[-1]
+            motions.pop(0)
+        if not motions:
+            self.q_command = self._anchor.copy()
 
     # ------------------------------------------------------------ hand
     def hand_at_next_motion(self, state: str) -> None:
@@ -206,3 +562,17 @@ class VirtualController:
     def hand(self, state: str) -> None:
         """Drive the gripper valves: 'open', 'close' or 'relax'."""
         self.cell.set_gripper(closed=(state == "close"))
+
+
+def _timed(trajectory: Trajectory, params: MotionParameters) -> Trajectory:
+    """The planned motion slowed by the monitor speed, and to DURATION if that is longer."""
+    return trajectory.stretched(max(trajectory.duration * params.time_scale, params.duration_s))
+
+
+class _Still(Trajectory):
+    """DELAY: standing still at q for `seconds`."""
+
+    def __init__(self, q: np.ndarray, seconds: float):
+        q = np.array(q, dtype=float)
+        z = np.zeros(1)
+        super().__init__(float(seconds), q, q.copy(), np.array([0.0, seconds]), z, z, np.zeros(1))

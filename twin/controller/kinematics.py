@@ -241,13 +241,14 @@ class RobotKinematics:
         return float(R[:, 2] @ z_home) >= math.cos(TILT_TOLERANCE)
 
     def ik(self, T: np.ndarray, q_seed: np.ndarray, righty: bool | None = None, *,
-           continuous: bool = False) -> np.ndarray:
+           continuous: bool = False, single: bool = False) -> np.ndarray:
         """Joint vector (SI) putting the flange at `T` (4x4, metres, base frame).
 
         `righty`: the SCARA arm configuration (None keeps the seed's).  Revolute joints
         that can turn more than one way (J4 multi-turn, J1 if its range allows) take the
-        solution nearest the seed within the limits; with `continuous` (straight-line
-        motion), the nearest solution is taken and a joint limit is an error.
+        solution nearest the seed within the limits (V+ MULTIPLE); with `single` (V+
+        SINGLE) the wrist, the last joint, is kept within +/-180 deg.  With `continuous`
+        (straight-line motion), the nearest solution is taken and a joint limit is an error.
         Raises KinematicsError (-610 out of range, -1021 joint limit)."""
         T = np.asarray(T, dtype=float)
         q_seed = np.asarray(q_seed, dtype=float)
@@ -258,6 +259,8 @@ class RobotKinematics:
         else:
             q = q_seed.copy()
         q = self._refine(T, q)
+        if single and self.revolute[-1]:
+            q[-1] = float(_wrap(q[-1]))
         self.check_limits(q)
         return q
 

@@ -39,6 +39,7 @@ WAYPOINT_SPACING = 0.010  # m: first try of the straight-line waypoint spacing
 WAYPOINT_ANGLE = math.radians(5.0)  # rad: same, for the orientation
 MAX_REFINEMENTS = 5
 CART_ACCEL_UNLIMITED = 1e3  # m/s^2 on the distance coordinate: no Cartesian acceleration limit
+PHASE_TOLERANCE = 1e-3  # path accelerations within this fraction of the largest count as zero
 
 
 @dataclass
@@ -95,18 +96,75 @@ class Trajectory:
         q, qd = self._eval(np.array([float(t)]))
         return q[0], qd[0]
 
+    # ------------------------------------------------------------ phases
+    def _phases(self) -> tuple[np.ndarray, np.ndarray]:
+        """Knot times and the sign of the path acceleration (+1, 0, -1) on each segment that
+        lasts (grid points toppra places a hair apart give segments of no duration and
+        meaningless accelerations: they are left out)."""
+        keep = np.diff(self._t) > 1e-7
+        a = self._a[keep]
+        tol = PHASE_TOLERANCE * float(np.max(np.abs(a), initial=0.0))
+        sign = np.where(a > tol, 1, np.where(a < -tol, -1, 0))
+        return self._t[:-1][keep], np.diff(self._t)[keep], sign
+
+    @property
+    def accel_time(self) -> float:
+        """Length of the acceleration phase: from the start until the path speed stops rising."""
+        if self.duration <= 0.0 or len(self._a) == 0:
+            return 0.0
+        start, _, sign = self._phases()
+        falling = np.flatnonzero(sign <= 0)
+        return float(start[falling[0]]) if len(falling) else self.duration
+
+    @property
+    def decel_time(self) -> float:
+        """Length of the final deceleration phase: from the last moment the path speed was not
+        falling until the end (V+ guide v17 "Robot Speed": accelerate, travel, decelerate)."""
+        if self.duration <= 0.0 or len(self._a) == 0:
+            return 0.0
+        start, length, sign = self._phases()
+        not_falling = np.flatnonzero(sign >= 0)
+        if not len(not_falling):
+            return self.duration
+        i = not_falling[-1]
+        return self.duration - float(start[i] + length[i])
+
+    def stretched(self, duration: float) -> "Trajectory":
+        """The same path slowed down uniformly to take `duration` seconds (monitor speed,
+        DURATION); a motion that already takes that long is returned unchanged."""
+        if self.duration <= 0.0 or duration <= self.duration:
+            return self
+        f = duration / self.duration
+        return Trajectory(duration, self.q_start, self.q_end, self._t * f, self._s, self._v / f,
+                          self._a / (f * f), self._path, self._dpath)
+
 
 # ---------------------------------------------------------------- toppra
-def _parametrize(ss: np.ndarray, waypoints: np.ndarray, vmax: np.ndarray, amax: np.ndarray):
-    """Time-optimal rest-to-rest s(t) along the spline through `waypoints`: (t, s, v, a)."""
+def accel_bounds(dq: np.ndarray, amax: np.ndarray, accel: float = 1.0, decel: float = 1.0) -> np.ndarray:
+    """Per-joint (lower, upper) acceleration bounds for ACCEL accel, decel (fractions of the
+    maximum): a joint moving by `dq` speeds up in the direction of dq and slows down against
+    it; a joint that ends where it started gets the smaller of the two both ways."""
+    dq = np.asarray(dq, dtype=float)
+    amax = np.asarray(amax, dtype=float)
+    up = np.where(dq > 0, accel, np.where(dq < 0, decel, min(accel, decel))) * amax
+    down = np.where(dq > 0, decel, np.where(dq < 0, accel, min(accel, decel))) * amax
+    return np.column_stack([-down, up])
+
+
+def _parametrize(ss: np.ndarray, waypoints: np.ndarray, vmax: np.ndarray, abounds: np.ndarray):
+    """Time-optimal rest-to-rest s(t) along the spline through `waypoints`: (t, s, v, a).
+    `abounds` is (dof, 2): lower and upper joint acceleration."""
     path = ta.SplineInterpolator(ss, waypoints)
     vel = constraint.JointVelocityConstraint(np.column_stack([-vmax, vmax]))
     acc = constraint.JointAccelerationConstraint(
-        np.column_stack([-amax, amax]), discretization_scheme=constraint.DiscretizationType.Interpolation
+        abounds, discretization_scheme=constraint.DiscretizationType.Interpolation
     )
-    grid = np.linspace(ss[0], ss[-1], N_GRID)
+    # Grid points closer together near both ends, where a motion speeds up and slows down:
+    # a short acceleration phase spread over a few uniform cells comes out slow.
+    grid = ss[0] + (ss[-1] - ss[0]) * 0.5 * (1.0 - np.cos(np.linspace(0.0, math.pi, N_GRID)))
     if len(ss) > 2:  # also put grid points on the waypoints, where the spline's curvature changes
-        grid = np.unique(np.concatenate([grid, ss]))
+        grid = np.sort(np.concatenate([grid, ss]))
+        grid = grid[np.concatenate([[True], np.diff(grid) > 1e-9])]  # no cells of zero length
     instance = algo.TOPPRA([vel, acc], path, gridpoints=grid, solver_wrapper="seidel",
                            parametrizer="ParametrizeConstAccel")
     out = instance.compute_trajectory(0.0, 0.0)
@@ -115,8 +173,8 @@ def _parametrize(ss: np.ndarray, waypoints: np.ndarray, vmax: np.ndarray, amax: 
     return out._ts, out._ss, out._velocities, out._us
 
 
-def _trajectory(ss, waypoints_q, waypoints_all, vmax, amax) -> Trajectory:
-    t, s, v, a = _parametrize(ss, waypoints_all, vmax, amax)
+def _trajectory(ss, waypoints_q, waypoints_all, vmax, abounds) -> Trajectory:
+    t, s, v, a = _parametrize(ss, waypoints_all, vmax, abounds)
     path = CubicSpline(ss, waypoints_q) if len(ss) > 2 else _Line(waypoints_q[0], waypoints_q[-1])
     dpath = path.derivative()
     q0, q1 = np.array(waypoints_q[0], dtype=float), np.array(waypoints_q[-1], dtype=float)
@@ -157,9 +215,10 @@ def joint_move_time(q0, q1, vmax, amax) -> float:
 
 
 # ---------------------------------------------------------------- planners
-def plan_joint_move(q0, q1, vmax, amax) -> Trajectory:
-    """MOVE / APPRO / DEPART: straight line from q0 to q1 in joint space, rest to rest,
-    time-optimal within the per-joint |qd| <= vmax and |qdd| <= amax."""
+def plan_joint_move(q0, q1, vmax, amax, accel: float = 1.0, decel: float = 1.0) -> Trajectory:
+    """MOVE / APPRO / DEPART / DRIVE: straight line from q0 to q1 in joint space, rest to rest,
+    time-optimal within the per-joint |qd| <= vmax and |qdd| <= amax (speeding up within
+    accel * amax, slowing down within decel * amax: see `accel_bounds`)."""
     q0 = np.array(q0, dtype=float)
     q1 = np.array(q1, dtype=float)
     if np.max(np.abs(q1 - q0), initial=0.0) < 1e-12:
@@ -168,7 +227,7 @@ def plan_joint_move(q0, q1, vmax, amax) -> Trajectory:
     amax = np.asarray(amax, float)
     ss = np.array([0.0, 1.0])
     W = np.vstack([q0, q1])
-    return _trajectory(ss, W, W, vmax, amax)
+    return _trajectory(ss, W, W, vmax, accel_bounds(q1 - q0, amax, accel, decel))
 
 
 def _segment_clear_of_hole(kin: RobotKinematics, P0: np.ndarray, P1: np.ndarray, righty: bool) -> None:
@@ -199,37 +258,48 @@ def _distance_to_segment(P: np.ndarray, p0: np.ndarray, p1: np.ndarray) -> np.nd
     return np.linalg.norm(P - (p0 + u[:, None] * d), axis=1)
 
 
-def plan_straight_move(kin: RobotKinematics, q0, T1, vmax, amax, cart_speed_max, righty=None) -> Trajectory:
-    """MOVES / APPROS / DEPARTS: the flange origin on the straight line from fk(q0) to T1
-    (metres, base frame), orientation by slerp, arm configuration held.
+def _tip_positions(kin: RobotKinematics, Q: np.ndarray, tool: np.ndarray) -> np.ndarray:
+    """Tool-tip positions (n x 3, m) for joint vectors Q."""
+    if not np.any(tool[:3, 3]):
+        return kin.fk_positions(Q)
+    return np.array([(kin.fk(q) @ tool)[:3, 3] for q in Q])
 
-    Limits: joint |qd| <= vmax, |qdd| <= amax, and the flange's linear speed
-    <= cart_speed_max (m/s).  Raises KinematicsError: -1022 when `righty` asks for a
-    configuration change, -610 when the line leaves the workspace, -1021 when a joint
-    would pass its limit on the way (J2 for a line passing closer to the J1 axis than the
-    elbow can fold)."""
+
+def plan_straight_move(kin: RobotKinematics, q0, T1, vmax, amax, cart_speed_max, righty=None,
+                       accel: float = 1.0, decel: float = 1.0, tool: np.ndarray | None = None) -> Trajectory:
+    """MOVES / APPROS / DEPARTS / ALIGN: the tool tip on the straight line from its pose at q0
+    to T1 (the tool-tip pose, metres, base frame), orientation by slerp, arm configuration
+    held.  `tool` is the TOOL transformation (flange -> tip, metres; None: the flange).
+
+    Limits: joint |qd| <= vmax, speeding up within accel * amax and slowing down within
+    decel * amax, and the tip's linear speed <= cart_speed_max (m/s).  Raises
+    KinematicsError: -1022 when `righty` asks for a configuration change, -610 when the
+    line leaves the workspace, -1021 when a joint would pass its limit on the way (J2 for a
+    line passing closer to the J1 axis than the elbow can fold)."""
     q0 = np.array(q0, dtype=float)
+    tool = np.eye(4) if tool is None else np.asarray(tool, dtype=float)
+    untool = np.linalg.inv(tool)
     T1 = np.asarray(T1, dtype=float)
     vmax = np.asarray(vmax, float)
     amax = np.asarray(amax, float)
     config = kin.is_righty(q0)
     if righty is not None and kin.scara is not None and bool(righty) != config:
         raise KinematicsError(STRAIGHT_LINE_CONFIG, "*Straight-line motion can't alter configuration*")
-    T0 = kin.fk(q0).copy()
+    T0 = kin.fk(q0) @ tool
     p0, p1 = T0[:3, 3].copy(), T1[:3, 3].copy()
     R0 = T0[:3, :3].copy()
     length = float(np.linalg.norm(p1 - p0))
     rotvec = pin.log3(R0.T @ T1[:3, :3])
     if kin.dof == 4:  # only the rotation about the vertical can be followed; a tilt is an error in ik
-        rotvec = np.array([0.0, 0.0, rotvec[2]]) if kin._tilt_ok(T1[:3, :3]) else rotvec
+        rotvec = np.array([0.0, 0.0, rotvec[2]]) if kin._tilt_ok(T1[:3, :3] @ untool[:3, :3]) else rotvec
     angle = float(np.linalg.norm(rotvec))
     # The end point first: an unreachable target is reported as such.
-    kin.ik(T1, q0, righty=config)
+    kin.ik(T1 @ untool, q0, righty=config)
     if length < 1e-9 and angle < 1e-9:
         return Trajectory.still(q0)
     if kin.scara is not None:
         s = kin.scara
-        _segment_clear_of_hole(kin, (T0 @ s.M4f_inv)[:3, 3], (T1 @ s.M4f_inv)[:3, 3], config)
+        _segment_clear_of_hole(kin, (T0 @ untool @ s.M4f_inv)[:3, 3], (T1 @ untool @ s.M4f_inv)[:3, 3], config)
 
     n = max(2, int(math.ceil(length / WAYPOINT_SPACING)), int(math.ceil(angle / WAYPOINT_ANGLE))) + 1
     for attempt in range(MAX_REFINEMENTS + 1):
@@ -240,14 +310,12 @@ def plan_straight_move(kin: RobotKinematics, q0, T1, vmax, amax, cart_speed_max,
         for i in range(1, n):
             T[:3, :3] = R0 @ pin.exp3(ss[i] * rotvec)
             T[:3, 3] = p0 + ss[i] * (p1 - p0)
-            if i == n - 1:
-                T = T1
-            Q[i] = kin.ik(T, Q[i - 1], righty=config, continuous=True)
-        # Deviation of the spline's flange path from the line, between the waypoints.
+            Q[i] = kin.ik((T1 if i == n - 1 else T) @ untool, Q[i - 1], righty=config, continuous=True)
+        # Deviation of the spline's tip path from the line, between the waypoints.
         spline = CubicSpline(ss, Q)
         probe = np.concatenate([(ss[:-1] + ss[1:]) / 2, ss[:-1] + (ss[1:] - ss[:-1]) / 4,
                                 ss[:-1] + 3 * (ss[1:] - ss[:-1]) / 4])
-        deviation = float(np.max(_distance_to_segment(kin.fk_positions(spline(probe)), p0, p1)))
+        deviation = float(np.max(_distance_to_segment(_tip_positions(kin, spline(probe), tool), p0, p1)))
         if deviation <= LINE_TOLERANCE:
             break
         n = 2 * n - 1
@@ -257,4 +325,4 @@ def plan_straight_move(kin: RobotKinematics, q0, T1, vmax, amax, cart_speed_max,
     W = np.column_stack([Q, length * ss])
     v_all = np.append(vmax, cart_speed_max if length > 0 else 1.0)
     a_all = np.append(amax, CART_ACCEL_UNLIMITED)
-    return _trajectory(ss, Q, W, v_all, a_all)
+    return _trajectory(ss, Q, W, v_all, accel_bounds(W[-1] - W[0], a_all, accel, decel))

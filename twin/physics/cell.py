@@ -2,8 +2,10 @@
 
 Built from a scene file (``scenes/*.toml``) with ``mujoco.MjSpec``:
 
-* the robot MJCF is the base spec (its names, j1..j4 and <joint>_pos/_vel actuators, are
-  kept), its root body moved to the scene's base pose;
+* the robot MJCF is the base spec (its names, its joints in chain order and their
+  <joint>_pos/_vel actuators, are kept), its root body moved to the scene's base pose; any
+  serial robot with one position and one velocity actuator per joint fits (the Cobra SCARA,
+  the Cartesian gantry);
 * the gripper MJCF is attached at the robot's flange site with a prefix;
 * table, nest, belt (a static box with ``surfacevel``), bin and a pool of parts are added;
 * one inactive weld per part (gripper palm -> part) is declared for grasping.
@@ -11,8 +13,15 @@ Built from a scene file (``scenes/*.toml``) with ``mujoco.MjSpec``:
 Grasping is by friction, made robust with a weld that engages only from real contact:
 when the gripper is commanded closed and BOTH pads touch the same part, the current
 relative pose is written into the weld and the weld is activated; it is released when
-the gripper opens, or when its constraint force exceeds the friction capacity
-2 * mu * grip force (slip: the part is dropped and falls).
+the gripper opens, or when the net force the gripper applies to the part (weld plus jaw
+contacts) exceeds the friction capacity 2 * mu * grip force (slip: the part is dropped
+and falls).
+
+Collisions (docs/motion.md): every check interval the contacts of the robot's and the
+gripper's geoms are examined.  A robot geom touching the fixed cell, or touching a part
+other than with its jaws while they close on it, hold it or have just let go of it, is a
+collision: it is recorded as an event (kind "collision") and handed to the run loop, which
+stops the robot and the program (`take_collisions`).
 
 Units: SI inside (m, rad, kg, N, s); reports give positions in mm.
 """
@@ -26,7 +35,8 @@ import mujoco
 import trimesh
 import numpy as np
 
-from .geometry import MM, flange_ik, matrix_to_quat, vplus_to_matrix, yaw_quat
+from ..controller.kinematics import RobotKinematics
+from .geometry import MM, matrix_to_quat, vplus_to_matrix, yaw_quat
 from .regions import Regions
 from .scene import load_scene, resolve
 
@@ -41,13 +51,15 @@ RETIRED_CONTYPE, RETIRED_CONAFFINITY = 2, 0
 RETIRE_SPEED = 2e-3  # m/s and rad/s: a part in the bin slower than this ...
 RETIRE_CHECKS = 3  # ... at this many floor checks in a row (0.1 s apart) retires
 RETIRED_DAMPING = (1e5, 100.0)  # N s/m and N m s/rad on a retired part's free joint (~um/s under a part's weight)
+RELEASE_GRACE_S = 0.5  # s after the jaws let go of a part during which they may still touch it
 
 
 class Cell:
     """A MuJoCo model of the work cell and the physics-side logic (feeder, grasp, slip).
 
     Attributes: ``model``/``data`` (MuJoCo), ``scene`` (parsed TOML), ``timestep`` (s),
-    ``robot_joint_names``, ``seed`` (feeder seed in use), ``regions``.
+    ``robot_joint_names``, ``kinematics`` (the robot's pinocchio model), ``seed`` (feeder
+    seed in use), ``regions``.
     """
 
     # ------------------------------------------------------------------ construction
@@ -63,15 +75,17 @@ class Cell:
         feeder = scene["feeder"]
         self.seed: int = int(seed if seed is not None else feeder.get("seed", 0))
         self.regions = Regions(scene["regions"])
-        self.robot_joint_names: list[str] = ["j1", "j2", "j3", "j4"]
         self._build_model()
         self._init_runtime()
 
     def _build_model(self) -> None:
         sc = self.scene
         phys = sc.get("physics", {})
-        spec = mujoco.MjSpec.from_file(str(resolve(sc["robot"]["model"], self.scene_path)))
+        self.robot_model_path = resolve(sc["robot"]["model"], self.scene_path)
+        spec = mujoco.MjSpec.from_file(str(self.robot_model_path))
         spec.modelname = "twin_cell"
+        # The robot's joints, in chain order (the robot file holds nothing else).
+        self.robot_joint_names: list[str] = [j.name for j in spec.joints]
         self.sleep_enabled = bool(phys.get("sleep", True))
 
         # Options.
@@ -227,6 +241,8 @@ class Cell:
         jids = [m.joint(n).id for n in self.robot_joint_names]
         self._rq = np.array([m.jnt_qposadr[j] for j in jids])
         self._rv = np.array([m.jnt_dofadr[j] for j in jids])
+        self._qdd_full = np.zeros(m.nv)  # scratch vectors for the acceleration feed-forward
+        self._torque_full = np.zeros(m.nv)
         self._act_pos = np.array([m.actuator(f"{n}_pos").id for n in self.robot_joint_names])
         self._act_vel = np.array([m.actuator(f"{n}_vel").id for n in self.robot_joint_names])
         gp = self._gp
@@ -278,15 +294,33 @@ class Cell:
         self._steps_to_floor = self._floor_steps
         self.wall_time_in_step = 0.0
 
-        # Home: the robot at the IK of the home location, held by its servos; gripper open.
+        # Collision bookkeeping: which geoms belong to the moving robot (gripper included) and
+        # which of those are the jaws.
+        root = m.body(self._robot_root).id
+        robot_body = np.array([self._descends_from(b, root) and m.body_weldid[b] != 0 for b in range(m.nbody)])
+        jaw_body = np.array([m.body(b).name.startswith(f"{gp}finger") for b in range(m.nbody)])
+        self._robot_geom = robot_body[m.geom_bodyid]
+        self._jaw_geom = jaw_body[m.geom_bodyid]
+        self._touching: set[tuple[int, int]] = set()
+        self._collisions: list[dict] = []
+        self._released: tuple[int, float] = (-1, -1.0)
+
+        # Home: the robot at the IK of the home location (RIGHTY), held by its servos; gripper open.
         home = self.scene["robot"].get("home", "start")
-        q = flange_ik(m, self._base_T @ vplus_to_matrix(self.scene["locations"][home]),
-                      self.robot_joint_names, righty=True)
+        kin = self.kinematics = RobotKinematics.from_mjcf(self.robot_model_path)
+        seed = np.where(np.isfinite(kin.lower + kin.upper), (kin.lower + kin.upper) / 2, 0.0)
+        q = kin.ik(vplus_to_matrix(self.scene["locations"][home]), seed, righty=True)
         d.qpos[self._rq] = q
         d.ctrl[self._act_pos] = q
         d.ctrl[self._act_vel] = 0.0
         d.ctrl[self._finger_act] = 0.0
         mujoco.mj_forward(m, d)
+
+    def _descends_from(self, body: int, root: int) -> bool:
+        parent = self.model.body_parentid
+        while body not in (0, root):
+            body = int(parent[body])
+        return body == root
 
     # ------------------------------------------------------------------ robot interface
     @property
@@ -295,18 +329,27 @@ class Cell:
         return float(self.data.time)
 
     def robot_qpos(self) -> np.ndarray:
-        """Robot joint positions (rad for j1/j2/j4, m for j3), order of robot_joint_names."""
+        """Robot joint positions (rad for revolute, m for prismatic joints), order of robot_joint_names."""
         return self.data.qpos[self._rq].copy()
 
     def robot_qvel(self) -> np.ndarray:
         """Robot joint velocities (rad/s, m/s)."""
         return self.data.qvel[self._rv].copy()
 
-    def set_servo(self, q: np.ndarray, qd: np.ndarray) -> None:
-        """Servo references: positions (rad, m) and velocity feed-forward (rad/s, m/s)."""
+    def set_servo(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray | None = None) -> None:
+        """Servo references: positions (rad, m), velocity feed-forward (rad/s, m/s) and, when
+        given, acceleration feed-forward (rad/s^2, m/s^2): the drives add the torque M(q) qdd
+        that the planned acceleration needs, as a servo with inertia feed-forward does."""
         ctrl = self.data.ctrl
         ctrl[self._act_pos] = q
         ctrl[self._act_vel] = qd
+        applied = self.data.qfrc_applied
+        if qdd is None:
+            applied[self._rv] = 0.0
+            return
+        self._qdd_full[self._rv] = qdd
+        mujoco.mj_mulM(self.model, self.data, self._torque_full, self._qdd_full)
+        applied[self._rv] = self._torque_full[self._rv]
 
     def set_gripper(self, closed: bool) -> None:
         """Command the jaws closed or open. Opening releases any held part at once."""
@@ -366,6 +409,7 @@ class Cell:
         elif self._held is not None and t >= self._held_since + SLIP_GRACE_S:
             self._check_slip()
         self._check_feeder(t)
+        self._check_collisions(t)
         self._steps_to_floor -= self._check_steps if not grasping else 1
         if self._steps_to_floor <= 0:
             self._steps_to_floor = self._floor_steps
@@ -416,9 +460,12 @@ class Cell:
         self._events.append({"t": round(float(d.time), 4), "kind": "grasp", "part": int(i),
                              "where": self.regions.region_of(p2)})
 
-    def _weld_force(self, i: int) -> float:
-        """Norm of the translational constraint force of part i's weld, N."""
-        d = self.data
+    def _grip_load(self, i: int) -> float:
+        """Norm of the net force the gripper applies to part i, N: its weld plus every contact
+        of a robot geom with the part.  The weld and the squeezing pads push against each
+        other (tens of newtons that cancel); only their sum is what friction must carry
+        (the part's weight and inertia, and whatever presses the part against the cell)."""
+        m, d = self.model, self.data
         eq = self._part_eq[i]
         nefc = d.nefc
         # Equality rows come first in the constraint list; only one weld is ever active.
@@ -426,12 +473,22 @@ class Cell:
                               & (d.efc_id[:min(nefc, 12)] == eq))
         if len(rows) < 3:
             return 0.0
-        return float(np.linalg.norm(d.efc_force[rows[:3]]))
+        total = -d.efc_force[rows[:3]]  # the weld pulls body2 (the part) against its error
+        g = self._part_geom[i]
+        pairs = d.contact.geom[:d.ncon]
+        robot = self._robot_geom[pairs]
+        gripping = np.flatnonzero(((pairs[:, 0] == g) & robot[:, 1]) | ((pairs[:, 1] == g) & robot[:, 0]))
+        wrench = np.zeros(6)
+        for k in gripping.tolist():
+            mujoco.mj_contactForce(m, d, k, wrench)
+            force = d.contact.frame[k].reshape(3, 3).T @ wrench[:3]  # on geom2, world axes
+            total = total + (force if pairs[k, 1] == g else -force)
+        return float(np.linalg.norm(total))
 
     def _check_slip(self) -> None:
         i = self._held
         capacity = 2.0 * self.grip_mu * self.grip_force()
-        force = self._weld_force(i)
+        force = self._grip_load(i)
         if force > capacity:
             self._events.append({"t": round(self.time, 4), "kind": "slip", "part": int(i),
                                  "force_n": round(force, 2), "capacity_n": round(capacity, 2)})
@@ -441,6 +498,7 @@ class Cell:
         d = self.data
         d.eq_active[self._part_eq[i]] = 0
         self._held = None
+        self._released = (i, float(d.time))
         pos = d.xpos[self._part_body[i]]
         where = self.regions.region_of(pos)
         if commanded and self.regions.is_place(where):
@@ -455,6 +513,43 @@ class Cell:
         self._dropped[i] = True
         self._events.append({"t": round(self.time, 4), "kind": "dropped", "part": int(i),
                              "where": where, "cause": cause})
+
+    # ------------------------------------------------------------------ collisions
+    def _check_collisions(self, t: float) -> None:
+        """Record each new robot contact that is a collision (see the module docstring)."""
+        d = self.data
+        ncon = d.ncon
+        touching: set[tuple[int, int]] = set()
+        if ncon:
+            g = d.contact.geom[:ncon]
+            robot = self._robot_geom[g]
+            mixed = np.flatnonzero((robot[:, 0] != robot[:, 1]) & (d.contact.dist[:ncon] < 0.0))
+            for k in mixed.tolist():
+                ours, other = (int(g[k, 0]), int(g[k, 1])) if robot[k, 0] else (int(g[k, 1]), int(g[k, 0]))
+                if not self._contact_allowed(ours, other, t):
+                    touching.add((ours, other))
+        m = self.model
+        for ours, other in sorted(touching - self._touching):
+            part = int(self._geom_part[other])
+            event = {"t": round(t, 4), "kind": "collision", "robot_geom": m.geom(ours).name,
+                     "with": f"part {part}" if part >= 0 else m.geom(other).name,
+                     "where": self.regions.region_of(self.data.geom_xpos[ours])}
+            self._events.append(event)
+            self._collisions.append(event)
+        self._touching = touching
+
+    def _contact_allowed(self, ours: int, other: int, t: float) -> bool:
+        """Jaws may touch the part they close on, hold, or have just let go of."""
+        part = int(self._geom_part[other])
+        if part < 0 or not self._jaw_geom[ours]:
+            return False
+        released, when = self._released
+        return self._closed or part == self._held or (part == released and t - when < RELEASE_GRACE_S)
+
+    def take_collisions(self) -> list[dict]:
+        """Collisions recorded since the last call (each is also in `events`)."""
+        new, self._collisions = self._collisions, []
+        return new
 
     # ------------------------------------------------------------------ feeder
     def _check_feeder(self, t: float) -> None:
@@ -549,7 +644,8 @@ class Cell:
     # ------------------------------------------------------------------ reports
     @property
     def events(self) -> list[dict]:
-        """Physics events in time order: present, grasp, release, slip, dropped, feeder_empty.
+        """Physics events in time order: present, grasp, release, slip, dropped, feeder_empty,
+        collision.
 
         Each has ``t`` (s) and ``kind``; ``part`` is a part index, ``where`` a region name.
         """

@@ -1,40 +1,84 @@
-"""Motion and hand instructions; they drive the shared virtual controller (rt.robot)."""
+"""Motion and hand instructions; they drive the shared virtual controller (rt.robot).
+
+Locations are transformations (`Location`) or precision points (tuples of joint values,
+degrees and mm).  The CP switch (ENABLE/DISABLE CP) is read when a motion is issued.
+Modifiers that take ALWAYS here are written with it as a keyword name (`CPOFF ALWAYS`,
+`SINGLE ALWAYS`); `DURATION t ALWAYS` needs a grammar rule that does not exist yet, so
+DURATION applies to the next motion only (docs/motion.md).
+"""
 
 from __future__ import annotations
 
-from ....controller.location import approach
-from . import instruction
+from ....controller.location import Location, approach
+from .. import messages as msg
+from ..values import fail
+from . import function, instruction
 from .locations import location_arg
+
+
+def _cp(rt) -> bool:
+    return rt.switch("CP")
+
+
+def _destination(value):
+    """A motion's target: a Location, or a precision point's joint values."""
+    if isinstance(value, tuple):
+        return value
+    return location_arg(value)
+
+
+def _as_location(rt, value) -> Location:
+    """A transformation for APPRO and straight-line motions (a precision point converted)."""
+    if isinstance(value, tuple):
+        return rt.robot.location_of_joints(value)
+    return location_arg(value)
+
+
+def _always(names: tuple) -> bool:
+    extra = [n for n in names if n != "ALWAYS"]
+    if extra:
+        raise fail(msg.INVALID_ARGUMENT, " ".join(extra))
+    return bool(names)
 
 
 @instruction("MOVE", waits=True)
 def _move(rt, loc):
-    yield from rt.robot.move(location_arg(loc), straight=False)
+    yield from rt.robot.move(_destination(loc), straight=False, cp=_cp(rt))
 
 
 @instruction("MOVES", waits=True)
 def _moves(rt, loc):
-    yield from rt.robot.move(location_arg(loc), straight=True)
+    yield from rt.robot.move(_as_location(rt, loc), straight=True, cp=_cp(rt))
 
 
 @instruction("APPRO", waits=True)
 def _appro(rt, loc, distance=None):
-    yield from rt.robot.move(approach(location_arg(loc), distance or 0.0), straight=False)
+    yield from rt.robot.move(approach(_as_location(rt, loc), distance or 0.0), straight=False, cp=_cp(rt))
 
 
 @instruction("APPROS", waits=True)
 def _appros(rt, loc, distance=None):
-    yield from rt.robot.move(approach(location_arg(loc), distance or 0.0), straight=True)
+    yield from rt.robot.move(approach(_as_location(rt, loc), distance or 0.0), straight=True, cp=_cp(rt))
 
 
 @instruction("DEPART", waits=True)
 def _depart(rt, distance):
-    yield from rt.robot.move(approach(rt.robot.destination(), distance), straight=False)
+    yield from rt.robot.move(approach(rt.robot.destination(), distance), straight=False, cp=_cp(rt))
 
 
 @instruction("DEPARTS", waits=True)
 def _departs(rt, distance):
-    yield from rt.robot.move(approach(rt.robot.destination(), distance), straight=True)
+    yield from rt.robot.move(approach(rt.robot.destination(), distance), straight=True, cp=_cp(rt))
+
+
+@instruction("DRIVE", waits=True)
+def _drive(rt, joint, change, speed=None):
+    yield from rt.robot.drive(int(joint), float(change), 100.0 if speed is None else float(speed), cp=_cp(rt))
+
+
+@instruction("ALIGN", waits=True)
+def _align(rt):
+    yield from rt.robot.move(rt.robot.aligned(), straight=True, cp=_cp(rt))
 
 
 @instruction("BREAK", waits=True)
@@ -47,6 +91,55 @@ def _delay(rt, seconds):
     yield from rt.robot.dwell(float(seconds))
 
 
+# ---------------------------------------------------------------- motion modifiers
+@instruction("ACCEL")
+def _accel(rt, accel=None, decel=None):
+    rt.robot.set_accel(accel, decel)
+
+
+@function("ACCEL")
+def _accel_value(rt, select=1):
+    """ACCEL(1): acceleration %, ACCEL(2): deceleration %."""
+    settings = rt.robot.settings
+    return settings.decel if int(select) == 2 else settings.accel
+
+
+@instruction("DURATION")
+def _duration(rt, seconds):
+    rt.robot.set_duration(float(seconds))
+
+
+@instruction("CPON", names=True)
+def _cpon(rt, *names):
+    rt.robot.set_modifier("cp", True, _always(names))
+
+
+@instruction("CPOFF", waits=True, names=True)
+def _cpoff(rt, *names):
+    """CPOFF breaks continuous path: it waits for the robot to stop (V+ guide v17 L6454)."""
+    always = _always(names)
+    yield from rt.robot.wait_stopped()
+    rt.robot.set_modifier("cp", False, always)
+
+
+def _modifier(name: str, key: str, value: bool) -> None:
+    """A motion modifier that takes ALWAYS (V+ guide v17, "Motion Modifiers")."""
+    instruction(name, names=True)(lambda rt, *names: rt.robot.set_modifier(key, value, _always(names)))
+
+
+for _name, _key, _value in (("SINGLE", "single", True), ("MULTIPLE", "single", False),
+                            ("COARSE", "coarse", True), ("FINE", "coarse", False),
+                            ("NULL", "null", True), ("NONULL", "null", False)):
+    _modifier(_name, _key, _value)
+
+
+@instruction("BRAKE")
+def _brake(rt):
+    """BRAKE: the robot decelerates to a stop at once, on its path; the motion is over
+    (V+ guide v17 L6458-6461: "from any program task")."""
+    rt.robot.stop()
+
+
 @instruction("RIGHTY")
 def _righty(rt):
     rt.robot.request_configuration(righty=True)
@@ -57,7 +150,38 @@ def _lefty(rt):
     rt.robot.request_configuration(righty=False)
 
 
-# Hand: OPEN/CLOSE/RELAX act at the start of the next motion; the I forms wait
+# A 4-axis SCARA and a Cartesian robot have no elbow-up/down or wrist-flip choice: the
+# controller accepts the requests and has nothing to change (docs/motion.md).
+for _name in ("ABOVE", "BELOW", "FLIP", "NOFLIP"):
+    instruction(_name)(lambda rt: None)
+
+
+# ---------------------------------------------------------------- TOOL and BASE
+@instruction("TOOL", waits=True)
+def _tool(rt, loc):
+    yield from rt.robot.set_tool(location_arg(loc))
+
+
+@function("TOOL")
+def _tool_value(rt):
+    return rt.robot.tool
+
+
+@instruction("BASE", waits=True)
+def _base(rt, dx=None, dy=None, dz=None, rotation=None):
+    """BASE dx, dy, dz, rotation: the world frame shifted by (dx, dy, dz) mm and turned by
+    `rotation` degrees about Z, relative to the robot (V+ guide v17, "BASE")."""
+    shift = Location(dx or 0.0, dy or 0.0, dz or 0.0, rotation or 0.0, 0.0, 0.0)
+    yield from rt.robot.set_base(shift)
+
+
+@function("BASE")
+def _base_value(rt):
+    return rt.robot.base
+
+
+# ---------------------------------------------------------------- hand
+# OPEN/CLOSE/RELAX act at the start of the next motion; the I forms wait
 # for the robot to stop, act at once and then wait HAND.TIME (V+ guide v17,
 # "Hand Control").
 @instruction("OPEN")
