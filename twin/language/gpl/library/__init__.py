@@ -1,0 +1,64 @@
+"""The GPL built-in classes (Signal, Location, Profile, Move, Thread, ...).
+
+The contract between the interpreter and the library:
+
+* A built-in class is a Python class registered with ``@gpl_class("Name")``.
+  ``CLASSES`` maps the lower-cased GPL name to the class; GPL names are
+  case-insensitive, so the interpreter looks members up with ``member(cls, name)``.
+* ``New Name(args)`` calls ``cls(rt, *args)``: constructors take the runtime first.
+* Instance methods are plain methods ``fn(self, *args)``; instance properties are
+  Python ``property`` objects (getter, and setter when writable).
+* Shared (static) members are marked ``@shared`` and called as ``fn(rt, *args)``
+  (a shared property is a ``@shared`` function of no argument; when assignable,
+  the setter is ``fn(rt, value)`` registered with ``@shared_setter("Name")``).
+* A member that must wait for simulated time (Move.WaitForEOM, Thread.Sleep,
+  Thread.Join...) is a generator function: the interpreter runs it with
+  ``yield from``; it yields what scheduler predicates yield (see
+  twin/controller/scheduler.py).
+* Errors are raised as ``GplError(code, message)`` (twin/language/gpl/errors.py).
+
+``rt`` (GplRuntime below) is what a running GPL project offers the library.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Callable, Protocol
+
+CLASSES: dict[str, type] = {}
+
+
+class GplRuntime(Protocol):
+    robot: Any  # twin.controller.controller.VirtualController (shared with V+)
+    io: Any  # twin.controller.io.DigitalIO
+    console: Any  # .write(text): the GPL console output
+    sandbox: Path  # folder that file I/O is confined to
+
+    def clock(self) -> float: ...  # simulated seconds
+
+    def start_thread(self, delegate: Any, name: str) -> Any: ...
+    # Run a GPL procedure (a delegate / AddressOf) as a new cooperative thread;
+    # returns a handle with `.alive` (bool) and `.error` (GplError or None).
+
+
+def gpl_class(name: str) -> Callable[[type], type]:
+    def register(cls: type) -> type:
+        cls.gpl_name = name
+        cls.gpl_members = {
+            attr.lower(): attr for attr in dir(cls) if not attr.startswith("_")
+        }
+        CLASSES[name.lower()] = cls
+        return cls
+
+    return register
+
+
+def shared(fn: Callable) -> staticmethod:
+    """Mark a shared (static) member: called as fn(rt, *args)."""
+    fn.gpl_shared = True
+    return staticmethod(fn)
+
+
+def member(cls: type, name: str) -> str | None:
+    """The Python attribute behind GPL member `name` (any case), or None."""
+    return cls.gpl_members.get(name.lower())
