@@ -9,8 +9,8 @@ The contract between the interpreter and the library:
 * Instance methods are plain methods ``fn(self, *args)``; instance properties are
   Python ``property`` objects (getter, and setter when writable).
 * Shared (static) members are marked ``@shared`` and called as ``fn(rt, *args)``
-  (a shared property is a ``@shared`` function of no argument; when assignable,
-  the setter is ``fn(rt, value)`` registered with ``@shared_setter("Name")``).
+  (a shared property is a ``@shared`` function ``Name(rt)``; when assignable, its
+  setter is the ``@shared`` function ``set_Name(rt, value)``).
 * A member that must wait for simulated time (Move.WaitForEOM, Thread.Sleep,
   Thread.Join...) is a generator function: the interpreter runs it with
   ``yield from``; it yields what scheduler predicates yield (see
