@@ -16,12 +16,37 @@ The contract between the interpreter and the library:
   ``yield from``; it yields what scheduler predicates yield (see
   twin/controller/scheduler.py).
 * Errors are raised as ``GplError(code, message)`` (twin/language/gpl/errors.py).
+* (added by the interpreter) An instance property that takes arguments
+  (``loc.Angle(n)``, ``Signal.DIO(n)`` is the shared case) is a method
+  ``Name(self, *args)``; its setter is ``set_Name(self, *args, value)`` (shared:
+  ``set_Name(rt, *args, value)``).
+* (added by the interpreter) A ByRef parameter of a built-in member
+  (``Thread.TestAndSet(ByRef var, new)``, ``sock.Receive(ByRef buf, n)``) is
+  declared with ``@byref(position, ...)`` (0-based GPL argument positions, put
+  it *above* ``@shared``); the interpreter then passes a ``Ref`` there: read
+  ``ref.value``, assign ``ref.value = x`` to write the caller's variable.
+  Arrays and objects are references already and need no ``@byref``.
+* (added by the interpreter) GPL values in Python: Integer/Short/Byte ``int``,
+  Double ``float``, Single ``float``, Boolean ``bool``, String ``str``, Nothing
+  ``None``, arrays ``twin.language.gpl.values.GplArray``.
+* Indexed properties (``loc.Angle(n)``, ``Signal.DIO(n)``, ``Controller.PDb(id)``)
+  are methods: reading ``x.Name(i)`` calls ``Name(i)``; assigning
+  ``x.Name(i) = v`` calls ``set_Name(i, v)`` (shared: ``set_Name(rt, i, v)``).
+* ByRef parameters of built-in members (``Socket.Receive(ByRef buf, n)``,
+  ``Modbus.ReadCoils(start, n, ByRef bits)``, ``Thread.TestAndSet(ByRef v, new)``,
+  ``Controller.ShowDialog(buttons, msg, ByRef button)``) are declared with
+  ``@byref(i, ...)`` (0-based argument positions, not counting self / rt).  There
+  the interpreter passes a ``Ref``: an object whose ``value`` attribute reads and
+  writes the caller's variable (the ``Ref`` dataclass below is one).
+* ``rt.current_thread()`` is the handle of the calling thread (who has the
+  robot attached, Thread.CurrentThread).
 
 ``rt`` (GplRuntime below) is what a running GPL project offers the library.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Protocol
 
@@ -35,6 +60,8 @@ class GplRuntime(Protocol):
     sandbox: Path  # folder that file I/O is confined to
 
     def clock(self) -> float: ...  # simulated seconds
+
+    def current_thread(self) -> Any: ...
 
     def start_thread(self, delegate: Any, name: str) -> Any: ...
     # Run a GPL procedure (a delegate / AddressOf) as a new cooperative thread;
@@ -57,6 +84,53 @@ def shared(fn: Callable) -> staticmethod:
     """Mark a shared (static) member: called as fn(rt, *args)."""
     fn.gpl_shared = True
     return staticmethod(fn)
+
+
+def byref(*positions: int) -> Callable[[Callable], Callable]:
+    """Mark the 0-based argument positions that are ByRef (they receive a Ref)."""
+
+    def mark(fn: Callable) -> Callable:
+        target = fn.__func__ if isinstance(fn, staticmethod) else fn
+        target.gpl_byref = frozenset(positions)
+        return fn
+
+    return mark
+
+
+@dataclass
+class Ref:
+    """A ByRef argument: `value` is the caller's variable."""
+
+    value: Any = None
+
+
+class Ref:
+    """A ByRef argument: `value` reads and writes the caller's variable."""
+
+    __slots__ = ("get", "set")
+
+    def __init__(self, get: Callable[[], Any], set: Callable[[Any], None]):
+        self.get = get
+        self.set = set
+
+    @property
+    def value(self) -> Any:
+        return self.get()
+
+    @value.setter
+    def value(self, new: Any) -> None:
+        self.set(new)
+
+
+def byref(*positions: int) -> Callable:
+    """Mark the GPL argument positions (0-based) that a built-in takes ByRef."""
+
+    def mark(fn):
+        target = fn.__func__ if isinstance(fn, staticmethod) else fn
+        target.gpl_byref = frozenset(positions)
+        return fn
+
+    return mark
 
 
 def member(cls: type, name: str) -> str | None:
