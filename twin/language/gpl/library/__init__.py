@@ -16,19 +16,9 @@ The contract between the interpreter and the library:
   ``yield from``; it yields what scheduler predicates yield (see
   twin/controller/scheduler.py).
 * Errors are raised as ``GplError(code, message)`` (twin/language/gpl/errors.py).
-* (added by the interpreter) An instance property that takes arguments
-  (``loc.Angle(n)``, ``Signal.DIO(n)`` is the shared case) is a method
-  ``Name(self, *args)``; its setter is ``set_Name(self, *args, value)`` (shared:
-  ``set_Name(rt, *args, value)``).
-* (added by the interpreter) A ByRef parameter of a built-in member
-  (``Thread.TestAndSet(ByRef var, new)``, ``sock.Receive(ByRef buf, n)``) is
-  declared with ``@byref(position, ...)`` (0-based GPL argument positions, put
-  it *above* ``@shared``); the interpreter then passes a ``Ref`` there: read
-  ``ref.value``, assign ``ref.value = x`` to write the caller's variable.
-  Arrays and objects are references already and need no ``@byref``.
-* (added by the interpreter) GPL values in Python: Integer/Short/Byte ``int``,
-  Double ``float``, Single ``float``, Boolean ``bool``, String ``str``, Nothing
-  ``None``, arrays ``twin.language.gpl.values.GplArray``.
+* GPL values in Python: Integer/Short/Byte ``int``, Double and Single
+  ``float``, Boolean ``bool``, String ``str``, Nothing ``None``, arrays
+  ``twin.language.gpl.values.GplArray``.
 * Indexed properties (``loc.Angle(n)``, ``Signal.DIO(n)``, ``Controller.PDb(id)``)
   are methods: reading ``x.Name(i)`` calls ``Name(i)``; assigning
   ``x.Name(i) = v`` calls ``set_Name(i, v)`` (shared: ``set_Name(rt, i, v)``).
@@ -37,7 +27,8 @@ The contract between the interpreter and the library:
   ``Controller.ShowDialog(buttons, msg, ByRef button)``) are declared with
   ``@byref(i, ...)`` (0-based argument positions, not counting self / rt).  There
   the interpreter passes a ``Ref``: an object whose ``value`` attribute reads and
-  writes the caller's variable (the ``Ref`` dataclass below is one).
+  writes the caller's variable (``Ref(get, set)`` below; put ``@byref`` above
+  ``@shared``).
 * ``rt.current_thread()`` is the handle of the calling thread (who has the
   robot attached, Thread.CurrentThread).
 
@@ -46,7 +37,6 @@ The contract between the interpreter and the library:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Protocol
 
@@ -86,24 +76,6 @@ def shared(fn: Callable) -> staticmethod:
     return staticmethod(fn)
 
 
-def byref(*positions: int) -> Callable[[Callable], Callable]:
-    """Mark the 0-based argument positions that are ByRef (they receive a Ref)."""
-
-    def mark(fn: Callable) -> Callable:
-        target = fn.__func__ if isinstance(fn, staticmethod) else fn
-        target.gpl_byref = frozenset(positions)
-        return fn
-
-    return mark
-
-
-@dataclass
-class Ref:
-    """A ByRef argument: `value` is the caller's variable."""
-
-    value: Any = None
-
-
 class Ref:
     """A ByRef argument: `value` reads and writes the caller's variable."""
 
@@ -122,10 +94,10 @@ class Ref:
         self.set(new)
 
 
-def byref(*positions: int) -> Callable:
-    """Mark the GPL argument positions (0-based) that a built-in takes ByRef."""
+def byref(*positions: int) -> Callable[[Callable], Callable]:
+    """Mark the 0-based argument positions that are ByRef (they receive a Ref)."""
 
-    def mark(fn):
+    def mark(fn: Callable) -> Callable:
         target = fn.__func__ if isinstance(fn, staticmethod) else fn
         target.gpl_byref = frozenset(positions)
         return fn
