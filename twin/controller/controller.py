@@ -137,22 +137,24 @@ class VirtualController:
             return False
         return bool(np.all(np.abs(self.cell.robot_qpos() - self.q_command) <= self.fine))
 
-    def move(self, target: Location, straight: bool):
-        """Start a motion to `target` once the motion in progress is done."""
+    def move(self, target: Location, straight: bool, accel: float = 1.0):
+        """Start a motion to `target` once the motion in progress is done.  `accel` scales
+        the joint acceleration limits for this motion (a GPL Profile's Accel; 1 = nominal)."""
         if self._segment is not None:
             yield self._motion_done
         speed = self.settings.take()
         q0 = self.q_command
+        amax = self.kin.max_acceleration * accel
         try:
             if straight:
                 trajectory = plan_straight_move(
-                    self.kin, q0, self._matrix_m(target), self.kin.max_velocity, self.kin.max_acceleration,
+                    self.kin, q0, self._matrix_m(target), self.kin.max_velocity, amax,
                     self.settings.cartesian_speed_mm_s * speed / MM,
                 )
             else:
                 q1 = self.kin.ik(self._matrix_m(target), q0, righty=self._righty_request)
                 self._righty_request = None
-                trajectory = plan_joint_move(q0, q1, self.kin.max_velocity * speed, self.kin.max_acceleration)
+                trajectory = plan_joint_move(q0, q1, self.kin.max_velocity * speed, amax)
         except KinematicsError as err:
             raise ProgramError(err.message, err.code) from None
         self._start(_Segment(trajectory, self.dt, q0))

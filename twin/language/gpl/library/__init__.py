@@ -108,3 +108,7 @@ def byref(*positions: int) -> Callable[[Callable], Callable]:
 def member(cls: type, name: str) -> str | None:
     """The Python attribute behind GPL member `name` (any case), or None."""
     return cls.gpl_members.get(name.lower())
+
+
+# The classes register themselves on import.
+from . import console, locations, motion, robot, signal  # noqa: E402,F401

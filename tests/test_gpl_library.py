@@ -1,0 +1,500 @@
+"""The GPL built-in classes, called directly from Python on a real Simulation
+(scenes/scara_pick.toml): Location math and frames, Profile, Move, Robot,
+Controller, Signal, Console.  Manual references are lines of
+/work/shared/seeds/gpl-user-manual.txt (digest §14 numbers the examples)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from twin.language.gpl.errors import GplError
+from twin.language.gpl.library import CLASSES, member
+from twin.language.gpl.library.console import text_of
+from twin.simulation import Simulation
+
+Location, Profile, Move, Robot, Controller, Signal, RefFrame, Console = (
+    CLASSES[n] for n in ("location", "profile", "move", "robot", "controller", "signal", "refframe", "console")
+)
+
+
+class Thread:
+    """A scheduler task running one generator, as a GPL thread would."""
+
+    SLICE = object()
+
+    def __init__(self, generator):
+        self.generator = generator
+        self.finished = False
+        self.gpl_error = None
+
+    @property
+    def alive(self) -> bool:
+        return not self.finished
+
+
+class Runtime:
+    """What a running GPL project offers the library (library/__init__.py GplRuntime)."""
+
+    def __init__(self, sim: Simulation, sandbox: Path):
+        self.sim = sim
+        self.robot = sim.controller
+        self.io = sim.io
+        self.sandbox = sandbox
+        self.text: list[str] = []
+        self.console = type("ConsoleOut", (), {"write": lambda _, s: self.text.append(s)})()
+        self.clock = sim.clock
+        self.thread = None
+
+    def current_thread(self):
+        return self.thread
+
+    def run(self, *bodies, max_time: float = 30.0):
+        """Run each generator function body(rt) as a thread until all end; re-raise the first error."""
+        threads = []
+        for body in bodies:
+            thread = Thread(None)
+            thread.generator = self._wrap(thread, body)
+            threads.append(thread)
+            self.sim.scheduler.add(thread)
+        self.sim.run(max_sim_time=self.sim.clock() + max_time)
+        for thread in threads:
+            if thread.gpl_error is not None:
+                raise thread.gpl_error
+        return threads
+
+    def _wrap(self, thread, body):
+        def generator():
+            self.thread = thread
+            inner = body(self)
+            try:
+                wait = next(inner)
+                while True:
+                    self.thread = None
+                    yield wait
+                    self.thread = thread
+                    wait = inner.send(None)
+            except StopIteration:
+                pass
+            except GplError as err:
+                thread.gpl_error = err
+
+        return generator()
+
+
+@pytest.fixture
+def rt(tmp_path):
+    return Runtime(Simulation(), tmp_path)
+
+
+def xyz(rt, *values):
+    return Location.XYZValue(rt, *values)
+
+
+def ready(rt):
+    Controller.set_PowerEnabled(rt, True)
+    Robot.set_Attached(rt, 1)
+    Robot.Home(rt)
+
+
+def assert_pose(loc, expected, tol=1e-6):
+    got = [loc.X, loc.Y, loc.Z, loc.Yaw, loc.Pitch, loc.Roll]
+    assert np.allclose(got, expected, atol=tol), got
+
+
+# ------------------------------------------------------------ Location math
+def test_mul_is_the_manuals_worked_example(rt):
+    """Manual L1877 (E26): A=(10,25,-40), B=(0,5,0) combine to (10,30,-40); with A turned
+    90 deg about Z, (10,25,-40,0,0,90), the same B gives (5,25,-40,0,0,90)."""
+    b = xyz(rt, 0, 5, 0)
+    assert_pose(xyz(rt, 10, 25, -40).Mul(b), [10, 30, -40, 0, 0, 0])
+    assert_pose(xyz(rt, 10, 25, -40, 0, 0, 90).Mul(b), [5, 25, -40, 0, 0, 90])
+
+
+def test_inverse_unwinds_a_combination(rt):
+    """Manual L1879 and L907-909 (E9): the inverse of a pure translation is its negation,
+    and A.Inverse.Mul(A.Mul(B)) is B."""
+    a = xyz(rt, 10, 25, -40, 30, 60, 90)
+    b = xyz(rt, 1, 2, 3, 0, 90, 0)
+    assert xyz(rt, 7, 0, 0).Inverse().X == pytest.approx(-7)
+    assert_pose(a.Inverse().Mul(a.Mul(b)), [1, 2, 3, 0, 90, 0], tol=1e-9)
+
+
+def test_clone_is_independent_assignment_is_not(rt):
+    """Manual L945-960 (E11): after Clone a change to the original leaves the copy alone."""
+    loc1 = xyz(rt, 10, 0, 0)
+    loc2 = loc1.Clone()
+    alias = loc1
+    loc1.X = 20
+    assert loc2.X == 10 and alias.X == 20
+
+
+def test_refframe_basic_frame(rt):
+    """Manual L2027-2034 (E27): a location on ref1 with PosWrtRef zero has ref1's pose as
+    its total position, and follows the frame when the frame changes (L1996)."""
+    loc1 = Location(rt)
+    ref1 = RefFrame(rt)
+    loc1.RefFrame = ref1
+    ref1.Loc.XYZ(10, 20, 30, 0, 180, 20)
+    assert_pose(loc1.Pos, [10, 20, 30, 0, 180, 20])
+    assert_pose(loc1.PosWrtRef, [0, 0, 0, 0, 0, 0])
+    ref1.Loc.XYZInc(5, 0, 0)
+    assert loc1.Pos.X == pytest.approx(15)
+    assert_pose(ref1.Pos(), [15, 20, 30, 0, 180, 20])
+
+
+def test_frame_of_a_frame_and_pos_assignment(rt):
+    """A frame relative to another frame (L1839); assigning Pos stores frame^-1 * total."""
+    outer, inner = RefFrame(rt), RefFrame(rt)
+    outer.Loc.XYZ(100, 0, 0, 0, 0, 90)
+    inner.Loc.XYZ(10, 0, 0)
+    inner.Loc.RefFrame = outer
+    loc = Location(rt)
+    loc.RefFrame = inner
+    assert_pose(loc.Pos, [100, 10, 0, 0, 0, 90])
+    loc.Pos = xyz(rt, 100, 20, 5, 0, 0, 90)
+    assert_pose(loc.PosWrtRef, [10, 0, 5, 0, 0, 0], tol=1e-9)
+
+
+def test_frame_loop_is_an_error(rt):
+    a, b = RefFrame(rt), RefFrame(rt)
+    a.Loc.RefFrame = b
+    with pytest.raises(GplError) as err:
+        b.Loc.RefFrame = a
+    assert err.value.code == -3104
+
+
+def test_pallet_frame_steps_rows_then_columns_and_wraps(rt):
+    """Pallet frames (L2048-2072): item (1,1,1) at Loc, rows along Loc's X, columns along
+    its Y, PalletNextPos steps the row first and wraps after the last item."""
+    pallet = RefFrame(rt)
+    pallet.Type = 1
+    pallet.Loc.XYZ(100, 200, 0, 0, 0, 90)  # turned: rows run along world +Y
+    pallet.set_PalletMaxIndex(1, 3)
+    pallet.set_PalletMaxIndex(2, 2)
+    pallet.set_PalletPitch(1, 10)
+    pallet.set_PalletPitch(2, 20)
+    seen = []
+    for _ in range(7):
+        p = pallet.Pos()
+        seen.append((round(p.X, 9), round(p.Y, 9)))
+        pallet.PalletNextPos()
+    assert seen == [(100, 200), (100, 210), (100, 220), (80, 200), (80, 210), (80, 220), (100, 200)]
+    pallet.PalletOrder = 213
+    pallet.PalletRowColLay(1, 1)
+    pallet.PalletNextPos()
+    assert (pallet.PalletIndex(1), pallet.PalletIndex(2)) == (1, 2)
+
+
+def test_cartesian_members_on_angles_location_are_errors(rt):
+    loc = Location(rt)
+    loc.Type = 1
+    loc.Angles(10, 20, 30, 40)
+    assert loc.Angle(3) == 30
+    for touch in (lambda: loc.X, lambda: loc.Mul(loc), lambda: loc.XYZ(1, 2, 3)):
+        with pytest.raises(GplError) as err:
+            touch()
+        assert err.value.code == -3100
+    with pytest.raises(GplError):
+        xyz(rt, 1, 2, 3).Angle(1)
+
+
+def test_distance_and_here3(rt):
+    """Location.Distance uses the XYZ of the total positions; Here3 builds a frame whose X
+    axis points from the origin to the second point and whose XY plane holds the third."""
+    assert Location.Distance(rt, xyz(rt, 0, 0, 0), xyz(rt, 3, 4, 12, 0, 90, 0)) == pytest.approx(13)
+    frame = Location(rt)
+    frame.Here3(xyz(rt, 10, 10, 0), xyz(rt, 10, 20, 0), xyz(rt, 0, 15, 0))
+    assert_pose(frame.Mul(xyz(rt, 5, 0, 0)), [10, 15, 0, 0, 0, 90], tol=1e-9)
+
+
+def test_member_lookup_is_case_insensitive(rt):
+    assert member(Location, "xyzvalue") == "XYZValue"
+    assert member(Move, "WAITFOREOM") == "WaitForEOM"
+
+
+# ------------------------------------------------------------ motion
+def test_motion_preconditions(rt):
+    """Manual L1954-1959: power, homing and attachment are required, in that order."""
+    start = xyz(rt, 300, 0, 300, 0, 180, 180)
+    expected = []
+
+    def attempt(rt):
+        try:
+            yield from Move.Loc(rt, start, Profile(rt))
+        except GplError as err:
+            expected.append(err.code)
+
+    def body(rt):
+        yield from attempt(rt)  # power off
+        Controller.set_PowerEnabled(rt, True)
+        yield from attempt(rt)  # not homed
+        Robot.set_Attached(rt, 1)
+        yield from attempt(rt)  # attached, still not homed
+        Robot.Home(rt)
+        Robot.set_Attached(rt, 0)
+        yield from attempt(rt)  # homed, detached
+
+    rt.run(body)
+    assert expected == [-1600, -1027, -1027, -1009]
+
+
+def test_only_one_thread_can_attach(rt):
+    """Robot.Attached gives one thread exclusive control (L2151)."""
+    codes = []
+
+    def first(rt):
+        Robot.set_Attached(rt, 1)
+        yield from Controller.SleepTick(rt, 50)
+        Robot.set_Attached(rt, 0)
+
+    def second(rt):
+        try:
+            Robot.set_Attached(rt, 1)
+        except GplError as err:
+            codes.append(err.code)
+        assert Robot.Attached(rt) == 0
+        yield from Controller.SleepTick(rt, 100)
+        Robot.set_Attached(rt, 1)
+        codes.append(Robot.Attached(rt))
+
+    rt.run(first, second)
+    assert codes == [-1006, 1]
+
+
+def test_move_loc_reaches_the_location_and_waitforeom_settles(rt):
+    pick = xyz(rt, 300, -180, 218, 0, 180, 180)
+    fine = Profile(rt)
+    fine.InRange = 1
+    where = {}
+
+    def body(rt):
+        ready(rt)
+        yield from Move.Loc(rt, pick, fine)
+        yield from Move.WaitForEOM(rt)
+        where["loc"] = Robot.Where(rt)
+        where["dest"] = Robot.Dest(rt)
+
+    rt.run(body)
+    assert Location.Distance(rt, where["loc"], pick) < 0.05
+    assert_pose(where["dest"], [300, -180, 218, 0, 180, 180], tol=1e-6)
+
+
+def _timed_move(rt, profile, target):
+    times = {}
+
+    def body(rt):
+        ready(rt)
+        t0 = Controller.Timer(rt)
+        yield from Move.Loc(rt, target, profile)
+        yield from Move.WaitForEOM(rt)
+        times["t"] = Controller.Timer(rt) - t0
+
+    rt.run(body)
+    return times["t"]
+
+
+def test_profile_speed_and_accel_change_the_motion_time(tmp_path):
+    """Profile.Speed and Accel are percentages of nominal (Table 12-4): a slower or gentler
+    profile takes longer for the same joint move."""
+    target = (350, 150, 250, 0, 180, 180)
+
+    def time_with(**settings):
+        rt = Runtime(Simulation(), tmp_path)
+        profile = Profile(rt)
+        for name, value in settings.items():
+            setattr(profile, name, value)
+        return _timed_move(rt, profile, xyz(rt, *target))
+
+    fast = time_with()
+    assert time_with(Speed=25) > 1.5 * fast
+    assert time_with(Accel=10, Decel=10) > 1.5 * fast
+
+
+def test_approach_clearance_along_tool_and_world_z(rt):
+    """ZClearance with ZWorld False backs off along the tool Z (up, for a tool pointing down);
+    with ZWorld True it rises along world Z.  Both give the point 30 mm above here."""
+    pick = xyz(rt, 300, -180, 218, 0, 180, 180)
+    pick.ZClearance = 30
+    heights = []
+
+    def body(rt):
+        ready(rt)
+        for world in (False, True):
+            pick.ZWorld = world
+            yield from Move.Approach(rt, pick, Profile(rt))
+            yield from Move.WaitForEOM(rt)
+            heights.append(Robot.Dest(rt).Z)
+
+    rt.run(body)
+    assert heights == pytest.approx([248, 248])
+    tilted = xyz(rt, 0, 0, 0, 0, 90, 0)
+    tilted.ZClearance = 10
+    assert np.allclose(tilted.clearance().position(), [-10, 0, 0])
+
+
+def test_angles_location_one_axis_and_rel(rt):
+    """An Angles location moves the axes to its values; OneAxis moves one axis (J3, mm);
+    Rel with a Cartesian offset moves in the destination's tool frame."""
+    got = {}
+
+    def body(rt):
+        ready(rt)
+        joints = Location(rt)
+        joints.Type = 1
+        joints.Angles(-60, 90, 100, 10)
+        fine = Profile(rt)
+        fine.InRange = 1
+        yield from Move.Loc(rt, joints, fine)
+        yield from Move.WaitForEOM(rt)
+        got["angles"] = Robot.WhereAngles(rt).joint_values()
+        yield from Move.OneAxis(rt, 3, -20, True, Profile(rt))
+        yield from Move.WaitForEOM(rt)
+        got["j3"] = Robot.DestAngles(rt).Angle(3)
+        before = Robot.Dest(rt)
+        yield from Move.Rel(rt, xyz(rt, 0, 0, 15), Profile(rt))  # tool Z points down
+        got["dz"] = Robot.Dest(rt).Z - before.Z
+
+    rt.run(body)
+    assert np.allclose(got["angles"], [-60, 90, 100, 10], atol=0.05)
+    assert got["j3"] == pytest.approx(80)
+    assert got["dz"] == pytest.approx(-15)
+
+
+def test_kinesol_round_trip(rt):
+    cart = xyz(rt, 320, 60, 200, 0, 180, 135)
+    cart.Config = 0x02  # GPL_Lefty
+    angles = cart.Kinesol()
+    assert angles.Type == 1
+    back = angles.Kinesol()
+    assert Location.Distance(rt, back, cart) < 1e-6
+    assert back.Roll == pytest.approx(135)
+
+
+def test_unreachable_location_is_a_gpl_error(rt):
+    def body(rt):
+        ready(rt)
+        yield from Move.Loc(rt, xyz(rt, 2000, 0, 200, 0, 180, 0), Profile(rt))
+
+    with pytest.raises(GplError) as err:
+        rt.run(body)
+    assert err.value.code == -1025
+
+
+def test_tool_offset_applies_to_where_and_moves(rt):
+    """Robot.Where = Base * flange * Tool: with a 100 mm tool along the flange Z, moving
+    the tool tip to a point puts the flange 100 mm above it (tool pointing down)."""
+    got = {}
+
+    def body(rt):
+        ready(rt)
+        Robot.set_Tool(rt, xyz(rt, 0, 0, 100))
+        yield from Move.Loc(rt, xyz(rt, 300, 0, 150, 0, 180, 180), Profile(rt))
+        yield from Move.WaitForEOM(rt)
+        got["flange"] = rt.robot.destination()
+        got["where"] = Robot.Where(rt)
+
+    rt.run(body)
+    assert got["flange"].z == pytest.approx(250)
+    assert got["where"].Z == pytest.approx(150, abs=0.05)
+
+
+def test_profile_values_are_checked_and_cloned(rt):
+    p = Profile(rt)
+    assert (p.Speed, p.Accel, p.Decel, p.InRange, p.Straight) == (100, 100, 100, 0, False)
+    with pytest.raises(GplError):
+        p.Speed = 0
+    with pytest.raises(GplError):
+        p.AccelRamp = -1
+    p.Speed = 40
+    q = p.Clone()
+    p.Speed = 60
+    assert q.Speed == 40
+
+
+def test_nothing_arguments_raise_null_object(rt):
+    def body(rt):
+        ready(rt)
+        yield from Move.Loc(rt, None, Profile(rt))
+
+    with pytest.raises(GplError) as err:
+        rt.run(body)
+    assert err.value.code == -705
+
+
+# ------------------------------------------------------------ controller, signals, console
+def test_sleeptick_timer_and_system_speed(rt):
+    out = {}
+
+    def body(rt):
+        t0 = Controller.Timer(rt)
+        yield from Controller.SleepTick(rt, 100)
+        out["slept"] = Controller.Timer(rt) - t0
+
+    rt.run(body)
+    assert Controller.Tick(rt) == pytest.approx(0.002)
+    assert out["slept"] == pytest.approx(0.2, abs=0.016)  # resumed at the next 16 ms cycle
+    Controller.set_SystemSpeed(rt, 25)
+    assert rt.robot.settings.monitor_speed == 25
+    with pytest.raises(GplError):
+        Controller.set_SystemSpeed(rt, 150)
+
+
+def test_show_dialog_answers_the_first_button_headless(rt):
+    """Manual L2110-2118 (E29), headless: the dialog's answer is button 1 and both
+    messages reach the system message log."""
+    button = SimpleNamespace(value=0)  # what the interpreter passes for a ByRef argument
+    Controller.SystemMessage(rt, "Sample output to Operator Control Panel")
+    Controller.ShowDialog(rt, "Yes,No", "Do you like this pop-up?", button)
+    Controller.SystemMessage(rt, "Operator pressed button " + str(button.value))
+    assert button.value == 1
+    assert "Operator pressed button 1" in "".join(rt.text)
+
+
+def test_signal_numbers_and_gripper_output(rt):
+    """Signal.DIO (L1808): outputs 1-512 read back; inputs 10001-10512 are read-only; the
+    gripper follows output 1, so closing it at the nest grasps the part there."""
+    Signal.set_DIO(rt, 5, True)
+    assert Signal.DIO(rt, 5) is True and rt.io.state[5] is True
+    assert Signal.DIO(rt, 10001) is False
+    with pytest.raises(GplError) as err:
+        Signal.set_DIO(rt, 10001, True)
+    assert err.value.code == -3105
+    with pytest.raises(GplError):
+        Signal.DIO(rt, 9999)
+    Signal.set_AIO(rt, 2, 3.5)
+    assert Signal.AIO(rt, 2) == 3.5
+
+    pick = xyz(rt, 300, -180, 218, 0, 180, 180)
+    pick.ZClearance = 25
+    fine = Profile(rt)
+    fine.InRange = 1
+    fine.Straight = True
+    held = {}
+
+    def body(rt):
+        ready(rt)
+        yield from Move.Approach(rt, pick, Profile(rt))
+        yield from Controller.SleepTick(rt, 300)  # the feeder presents a part
+        yield from Move.Loc(rt, pick, fine)
+        yield from Move.WaitForEOM(rt)
+        Signal.set_DIO(rt, 1, True)
+        yield from Controller.SleepTick(rt, 80)
+        yield from Move.Approach(rt, pick, fine)
+        yield from Move.WaitForEOM(rt)
+        held["part"] = rt.sim.cell.gripper_holding()
+
+    rt.run(body)
+    assert held["part"] is not None
+
+
+def test_console_write_formats(rt):
+    Console.Write(rt, "a = ")
+    Console.WriteLine(rt, 3.0)
+    Console.WriteLine(rt, 2.34 + 1.01)  # manual L1217: 3.35
+    Console.WriteLine(rt, True)
+    assert "".join(rt.text) == "a = 3\n3.35\nTrue\n"
+    assert text_of(-0.5) == "-0.5"
