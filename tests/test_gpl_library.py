@@ -19,6 +19,9 @@ from twin.simulation import Simulation
 Location, Profile, Move, Robot, Controller, Signal, RefFrame, Console = (
     CLASSES[n] for n in ("location", "profile", "move", "robot", "controller", "signal", "refframe", "console")
 )
+GplThread, File, StreamReader, StreamWriter, XmlDoc = (
+    CLASSES[n] for n in ("thread", "file", "streamreader", "streamwriter", "xmldoc")
+)
 
 
 class Thread:
@@ -51,6 +54,14 @@ class Runtime:
 
     def current_thread(self):
         return self.thread
+
+    def start_thread(self, procedure, name):
+        """`procedure` is a Python generator function body(rt) standing in for a GPL procedure."""
+        thread = Thread(None)
+        thread.name = name
+        thread.generator = self._wrap(thread, procedure)
+        self.sim.scheduler.add(thread)
+        return thread
 
     def run(self, *bodies, max_time: float = 30.0):
         """Run each generator function body(rt) as a thread until all end; re-raise the first error."""
@@ -498,3 +509,212 @@ def test_console_write_formats(rt):
     Console.WriteLine(rt, True)
     assert "".join(rt.text) == "a = 3\n3.35\nTrue\n"
     assert text_of(-0.5) == "-0.5"
+
+
+# ------------------------------------------------------------ threads
+def _counting_threads(rt, locked: bool, threads: int = 3, increments: int = 20) -> float:
+    """Manual L3309-3367 (Table 18-2, E43): `total = total + 1` in several threads.  The
+    read and the write are separated by a Thread.Sleep(0), where the scheduler may switch."""
+    shared_data = {"total": 0}
+    lock = SimpleNamespace(value=0)  # the ByRef variable TestAndSet reads and writes
+
+    def worker(rt):
+        for _ in range(increments):
+            if locked:
+                while GplThread.TestAndSet(rt, lock, 1) != 0:  # acquire_sem
+                    yield from GplThread.Sleep(rt, 0)
+            value = shared_data["total"]
+            yield from GplThread.Sleep(rt, 0)
+            shared_data["total"] = value + 1
+            if locked:
+                lock.value = 0  # release_sem
+
+    def main(rt):
+        started = [GplThread(rt, worker, "", f"w{i}") for i in range(threads)]
+        for t in started:
+            t.Start()
+        for t in started:
+            assert (yield from t.Join(-1)) is True
+
+    rt.run(main)
+    return shared_data["total"]
+
+
+def test_testandset_lock_makes_read_modify_write_safe(rt, tmp_path):
+    """Without a lock the interleaving of Table 18-2 loses updates; with the TestAndSet
+    lock of E43 the total is exactly threads x increments."""
+    assert _counting_threads(rt, locked=True) == 60
+    assert _counting_threads(Runtime(Simulation(), tmp_path), locked=False) < 60
+
+
+def test_sleep_join_events_and_thread_state(rt):
+    """Thread.Sleep is in milliseconds of simulated time (L2880); Join times out; events
+    wake a waiting thread; ThreadState follows the thread's life."""
+    log = {}
+
+    def sleeper(rt):
+        t0 = rt.clock()
+        yield from GplThread.Sleep(rt, 500)
+        log["slept"] = rt.clock() - t0
+
+    def waiter(rt):
+        log["polled"] = yield from GplThread.WaitEvent(rt, 0x2, 0)
+        log["event"] = yield from GplThread.WaitEvent(rt, 0x2, -1)
+        log["timeout"] = yield from GplThread.WaitEvent(rt, 0x2, 50)
+        log["me"] = GplThread.CurrentThread(rt) is GplThread.CurrentThread(rt)
+
+    def main(rt):
+        s = GplThread(rt, sleeper, "", "sleeper")
+        w = GplThread(rt, waiter, "", "waiter")
+        log["before"] = s.ThreadState
+        s.Start()
+        w.Start()
+        log["running"] = s.ThreadState
+        log["join50"] = yield from s.Join(50)
+        w.SendEvent(0x2 | 0x4)
+        log["join"] = yield from s.Join(-1)
+        log["after"] = s.ThreadState
+        yield from w.Join(-1)
+
+    rt.run(main)
+    assert 0.5 <= log["slept"] < 0.5 + 0.017
+    assert (log["before"], log["running"], log["after"]) == (-1, 2, 0)
+    assert (log["join50"], log["join"]) == (False, True)
+    assert (log["polled"], log["event"], log["timeout"]) == (0, 2, 0)
+    assert log["me"] is True
+
+
+# ------------------------------------------------------------ files
+def test_file_write_read_example(rt):
+    """Manual L2835-2853 (E37): ten lines written with StreamWriter come back, in order,
+    through Peek / ReadLine."""
+    out = StreamWriter(rt, "/ROMDISK/test.txt")
+    for ii in range(1, 11):
+        out.WriteLine("Line " + str(ii))
+    out.Close()
+    reader = StreamReader(rt, "/ROMDISK/test.txt")
+    lines = []
+    while reader.Peek() >= 0:
+        lines.append(reader.ReadLine())
+    reader.Close()
+    assert lines == [f"Line {i}" for i in range(1, 11)]
+    assert (rt.sandbox / "ROMDISK" / "test.txt").read_bytes().startswith(b"Line 1\r\nLine 2")
+    assert File.GetFiles(rt, "/ROMDISK") == ["test.txt"]
+    assert File.Length(rt, "/ROMDISK/test.txt") == 9 * 6 + 7 + 10 * 2
+
+
+def test_nvram_device_full_and_wrap(rt):
+    """Manual L2983-3014 (E40, E41): a 64-byte NVRAM file takes "Record 1".."Record 5" and
+    the sixth write raises -323 Device full; with -wrap, after 100 records it holds
+    "Record 96".."Record 100"."""
+    full_at = None
+    out = StreamWriter(rt, "/NVRAM/file2 -size 64")
+    for ii in range(1, 11):
+        try:
+            out.WriteLine("Record " + str(ii))
+        except GplError as err:
+            assert err.code == -323
+            full_at = ii
+            break
+    out.Close()
+    assert full_at == 6
+    reader = StreamReader(rt, "/NVRAM/file2")
+    assert [reader.ReadLine() for _ in range(5)] == [f"Record {i}" for i in range(1, 6)]
+    assert reader.Peek() == -1
+
+    out = StreamWriter(rt, "/NVRAM/file3 -size 64 -wrap")
+    for ii in range(1, 101):
+        out.WriteLine("Record " + str(ii))
+    out.Close()
+    reader = StreamReader(rt, "/NVRAM/file3")
+    lines = []
+    while reader.Peek() >= 0:
+        lines.append(reader.ReadLine())
+    assert lines == [f"Record {i}" for i in range(96, 101)]
+
+
+def test_file_paths_stay_in_the_sandbox(rt):
+    for bad in ("/etc/passwd", "/flash/../../x", "flash/x", "/flash/.hidden", "/NVRAM/file17"):
+        with pytest.raises(GplError):
+            StreamWriter(rt, bad)
+    with pytest.raises(GplError) as err:
+        StreamReader(rt, "/flash/missing.txt")
+    assert err.value.code == -3110
+    with pytest.raises(GplError) as err:
+        StreamWriter(rt, "/dev/com1")
+    assert err.value.code == -3103
+    File.CreateDirectory(rt, "/flash/a/b")
+    assert File.GetDirectories(rt, "/flash/a") == ["b"]
+    File.DeleteDirectory(rt, "/flash/a/b")
+    assert File.GetDirectories(rt, "/flash/a") == []
+
+
+# ------------------------------------------------------------ XML
+def _procedure_control(rt):
+    """XmlCreate, manual L3703-3717 (E51)."""
+    doc = XmlDoc(rt, "procedureControl")
+    root = doc.DocumentElement
+    root.AddAttribute("cellId", "TestCell")
+    root.AddElement("command", "start")
+    elem = root.AddElementNode("procedure")
+    elem.AddAttribute("jobId", "090507001")
+    elem.AddAttribute("name", "INS")
+    elem.AddElement("type", "protocol")
+    elem.AddElement("testSet", "INS_#_090507001")
+    elem.AddElement("index", "0")
+    return doc
+
+
+def test_xml_create_save_load_and_parse(rt):
+    """E51 builds the document, SaveString/LoadString round-trips it, and XmlParse
+    (L3638-3669, E49) reads exactly the manual's five values from it."""
+    text = SimpleNamespace(value="")
+    _procedure_control(rt).SaveString(text)
+    doc = XmlDoc.LoadString(rt, text.value)
+    assert doc.ErrorCode == 0
+    root = doc.DocumentElement
+    command = root.GetElementNode("command")
+    procedure = root.GetElementNode("procedure")
+    got = [root.GetAttribute("cellId"), command.Value, procedure.GetAttribute("jobId"),
+           procedure.GetElement("type"), procedure.GetElement("testSet")]
+    assert got == ["TestCell", "start", "090507001", "protocol", "INS_#_090507001"]
+    assert root.GetElementNode("missing") is None
+    with pytest.raises(GplError) as err:
+        root.GetElement("missing")
+    assert err.value.code == -799
+
+
+def test_xml_search_tree_and_freed_nodes(rt):
+    """XmlSearchTree (L3675-3697, E50) walks FirstChild/NextSibling and finds "type";
+    a removed node's handle raises -801 "No XML node" (L3731)."""
+    doc = _procedure_control(rt)
+
+    def search(node, name):
+        if node.Name == name and node.Type == "element":
+            return node
+        child = node.FirstChild
+        while child is not None:
+            found = search(child, name)
+            if found is not None:
+                return found
+            child = child.NextSibling
+        return None
+
+    found = search(doc.DocumentElement, "type")
+    assert found is not None and found.Value == "protocol"
+    assert found.ParentNode is doc.DocumentElement.GetElementNode("procedure")
+    found.ParentNode.RemoveChild(found)
+    with pytest.raises(GplError) as err:
+        found.Value
+    assert err.value.code == -801
+
+
+def test_xml_errors_and_entities(rt):
+    """Malformed text does not throw: ErrorCode is -799 (L3727).  Values are taken as
+    encoded character data (L3441): EncodeEntities then Value round-trips."""
+    bad = XmlDoc.LoadString(rt, "<a><b></a>")
+    assert bad.ErrorCode == -799 and bad.DocumentElement is None
+    doc = XmlDoc(rt, "r")
+    doc.DocumentElement.AddElement("v", XmlDoc.EncodeEntities(rt, 'a<b & "c"'))
+    assert doc.DocumentElement.GetElement("v") == 'a<b & "c"'
+    assert "a&lt;b &amp;" in doc.text()

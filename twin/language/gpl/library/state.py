@@ -1,5 +1,6 @@
-"""What the controller keeps about its robot for GPL: power, homing, which
-thread has the robot attached, base and tool offsets, the last profile.
+"""What the controller keeps for GPL: power, homing, which thread has the robot
+attached, base and tool offsets, the last profile; also its other per-run
+state (analog channels, thread events, NVRAM files).
 
 The twin has one robot (number 1) driven by the shared VirtualController.
 This state lives beside that controller (one per controller object), so every
@@ -42,6 +43,9 @@ class RobotState:
     dest_q: np.ndarray | None = None
     messages: list[str] = field(default_factory=list)  # Controller.SystemMessage log
     analog: dict[int, float] = field(default_factory=dict)  # Signal.AIO channels
+    events: dict = field(default_factory=dict)  # pending Thread events by thread handle
+    threads: dict = field(default_factory=dict)  # Thread object by thread handle
+    nvram: dict = field(default_factory=dict)  # /NVRAM files: name -> NvramFile
 
 
 _STATES: "weakref.WeakKeyDictionary[Any, RobotState]" = weakref.WeakKeyDictionary()
