@@ -1,6 +1,6 @@
 """The `twin` command: run a robot program on a cell, check a report.
 
-    twin run PROGRAM [--scene SCENE] [--main NAME] [--report R.json] [--rrd R.rrd]
+    twin run PROGRAM|PROJECT_DIR [--scene SCENE] [--main NAME] [--report R.json] [--rrd R.rrd]
                      [--max-sim-time S] [--seed N]
     twin check REPORT --expect EXPECT.toml [--junit FILE.xml]
 
@@ -60,10 +60,11 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="twin", description="Run robot programs on a digital twin of the cell.")
     sub = parser.add_subparsers(dest="command", required=True)
 
-    run = sub.add_parser("run", help="run a V+ program on a cell")
-    run.add_argument("program", help="V+ program file (.pg, .v2)")
+    run = sub.add_parser("run", help="run a V+ program or a GPL project on a cell")
+    run.add_argument("program", help="V+ program file (.pg, .v2) or GPL project folder (with Project.gpr)")
     run.add_argument("--scene", default=None, help="cell description (default: scenes/scara_pick.toml)")
-    run.add_argument("--main", default=None, help="program to execute (default: the first .PROGRAM)")
+    run.add_argument("--main", default=None, help="program to execute (default: the first .PROGRAM; "
+                     "GPL: the start procedure of Project.gpr)")
     run.add_argument("--report", default=None, help="write the placement report (JSON) here")
     run.add_argument("--rrd", default=None, help="write a Rerun recording here")
     run.add_argument("--max-sim-time", type=float, default=3600.0, help="stop after this many simulated seconds")

@@ -27,8 +27,8 @@ The contract between the interpreter and the library:
   ``Controller.ShowDialog(buttons, msg, ByRef button)``) are declared with
   ``@byref(i, ...)`` (0-based argument positions, not counting self / rt).  There
   the interpreter passes a ``Ref``: an object whose ``value`` attribute reads and
-  writes the caller's variable (``Ref(get, set)`` below; put ``@byref`` above
-  ``@shared``).
+  writes the caller's variable (``Ref`` below: written back when the member
+  returns; put ``@byref`` above ``@shared``).
 * ``rt.current_thread()`` is the handle of the calling thread (who has the
   robot attached, Thread.CurrentThread).
 
@@ -77,21 +77,13 @@ def shared(fn: Callable) -> staticmethod:
 
 
 class Ref:
-    """A ByRef argument: `value` reads and writes the caller's variable."""
+    """A ByRef argument: the built-in reads and assigns `value`; the interpreter
+    writes `value` back to the caller's variable when the member returns."""
 
-    __slots__ = ("get", "set")
+    __slots__ = ("value",)
 
-    def __init__(self, get: Callable[[], Any], set: Callable[[Any], None]):
-        self.get = get
-        self.set = set
-
-    @property
-    def value(self) -> Any:
-        return self.get()
-
-    @value.setter
-    def value(self, new: Any) -> None:
-        self.set(new)
+    def __init__(self, value: Any = None):
+        self.value = value
 
 
 def byref(*positions: int) -> Callable[[Callable], Callable]:
