@@ -10,6 +10,11 @@ from twin.language.gpl.runtime import GplSystem
 from twin.language.vplus.runtime import MAJOR_CYCLE, Console
 
 
+class NoRobot:
+    """A run without a cell has no controller; the library keeps its per-robot
+    state (threads' events, power) keyed on this object instead."""
+
+
 class Clock:
     def __init__(self) -> None:
         self.t = 0.0
@@ -24,7 +29,7 @@ def run_gpl(text: str, start: str = "Main", max_cycles: int = 100000, robot=None
     clock = Clock()
     scheduler = Scheduler()
     console = Console(stdin=io.StringIO(""), echo=None)
-    system = GplSystem(robot, DigitalIO(), clock, scheduler, console, sandbox=sandbox)
+    system = GplSystem(robot or NoRobot(), DigitalIO(), clock, scheduler, console, sandbox=sandbox)
     system.load_text(text, "test.gpl")
     thread = system.start(start)
     for _ in range(max_cycles):

@@ -236,9 +236,11 @@ def as_gpl_error(err: BaseException) -> GplError | None:
         return fail(OVERFLOW)
     if isinstance(err, RecursionError):
         return GplError(-712, "Stack overflow: too many nested procedure calls")
+    if not _raised_in_program(err):
+        return None  # not the program's fault: a bug in twin, let it show
     if isinstance(err, (AttributeError, TypeError)) and "NoneType" in str(err):
         return fail(NULL_OBJECT)
-    if isinstance(err, (TypeError, ValueError)) and _raised_in_program(err):
+    if isinstance(err, (TypeError, ValueError)):
         return fail(TYPE_MISMATCH, str(err))
     return None
 
@@ -313,7 +315,13 @@ class GplSystem:
         self._compile([parse(text, file)])
 
     def _compile(self, files) -> None:
-        compiled = ProjectCompiler(files).compile()
+        try:
+            compiled = ProjectCompiler(files).compile()
+        except ProgramError as err:
+            lines = self.sources.get(err.file or "", [])
+            if err.line and 0 < err.line <= len(lines):
+                err.located(text=lines[err.line - 1])
+            raise
         self.compiled = compiled
         ns = self.namespace
         ns.update(_NAMESPACE)
@@ -472,10 +480,6 @@ class GplThread:
             self.error = self.system.locate(gpl, err.__traceback__, self.procedure)
         finally:
             self.finished = True
-
-
-def _gen_exit(*args):
-    raise GeneratorExit
 
 
 # The names generated code sees, besides L_<class> and the project's own.
