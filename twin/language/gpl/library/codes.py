@@ -12,6 +12,7 @@ from ....controller.controller import NULLING_TIMEOUT as VPLUS_NULLING_TIMEOUT
 from ....controller.kinematics import JOINT_LIMIT, LOCATION_OUT_OF_RANGE as VPLUS_OUT_OF_RANGE
 from ....controller.kinematics import STRAIGHT_LINE_CONFIG
 from ..errors import GplError
+from . import shared
 
 # (code, message)
 DEVICE_FULL = (-323, "Device full")  # manual L2992
@@ -63,3 +64,13 @@ def from_controller(err) -> GplError:
         return GplError(err.code or INVALID_ARGUMENT[0], err.message.strip("*"))
     detail = err.message.strip("*")
     return fail(code, detail) if detail != code[1] else fail(code)
+
+
+def unsupported(qualified_name: str, why: str) -> staticmethod:
+    """A shared member the twin cannot offer: it raises -3103 saying why."""
+
+    def member(rt, *args):
+        raise fail(NOT_SUPPORTED, f"{qualified_name} ({why})")
+
+    member.__name__ = qualified_name.rsplit(".", 1)[-1]
+    return shared(member)

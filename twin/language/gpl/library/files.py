@@ -20,8 +20,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from . import codes
+from ..values import GplArray, format_value
 from . import gpl_class, shared
-from .console import text_of
 from .state import robot_state
 
 FOLDER_DEVICES = ("flash", "ROMDISK", "flash2", "flash3", "flash4", "flash5", "flash6", "flash7", "flash8")
@@ -204,11 +204,11 @@ class StreamWriter:
 
     def Write(self, value) -> None:
         self._check()
-        self._emit(text_of(value))
+        self._emit(format_value(value))
 
     def WriteLine(self, value="") -> None:
         self._check()
-        self._emit(text_of(value) + str(self.NewLine))
+        self._emit(format_value(value) + str(self.NewLine))
 
     def _emit(self, text: str) -> None:
         if self._nvram is not None:
@@ -282,18 +282,18 @@ class File:
         real.unlink()
 
     @shared
-    def GetDirectories(rt, path) -> list[str]:
+    def GetDirectories(rt, path) -> GplArray:
         return _listing(rt, str(path), folders=True)
 
     @shared
-    def GetFiles(rt, path) -> list[str]:
+    def GetFiles(rt, path) -> GplArray:
         if str(path).strip("/") == "NVRAM":
-            return sorted(robot_state(rt).nvram)
+            return GplArray.of(sorted(robot_state(rt).nvram), "")
         return _listing(rt, str(path), folders=False)
 
 
-def _listing(rt, path: str, folders: bool) -> list[str]:
+def _listing(rt, path: str, folders: bool) -> GplArray:
     real = sandbox_path(rt, path)
     if not real.is_dir():
         raise codes.fail(codes.FILE_NOT_FOUND, path)
-    return sorted(p.name for p in real.iterdir() if p.is_dir() == folders)
+    return GplArray.of(sorted(p.name for p in real.iterdir() if p.is_dir() == folders), "")

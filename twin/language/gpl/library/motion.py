@@ -218,14 +218,6 @@ def _go_location(rt, loc: GplLocation, profile):
         yield from _go(rt, flange_target(rt, loc.total()), profile, _righty(loc.Config))
 
 
-def _unsupported(name: str, why: str):
-    def member(rt, *args):
-        raise codes.fail(codes.NOT_SUPPORTED, f"Move.{name} ({why})")
-
-    member.__name__ = name
-    return shared(member)
-
-
 @gpl_class("Move")
 class Move:
     """The global Move class: shared members only."""
@@ -286,18 +278,18 @@ class Move:
     def StopSpecialModes(rt):
         """End any special trajectory mode: the twin has none active, so nothing to stop."""
 
-    Arc = _unsupported("Arc", "circular interpolation is not implemented")
-    Circle = _unsupported("Circle", "circular interpolation is not implemented")
-    Extra = _unsupported("Extra", "the cell has no extra axes")
-    ForceOverlap = _unsupported("ForceOverlap", "the twin does not blend motions")
-    SetJogCommand = _unsupported("SetJogCommand", "jog mode needs a pendant")
-    StartJogMode = _unsupported("StartJogMode", "jog mode needs a pendant")
-    SetRealTimeMod = _unsupported("SetRealTimeMod", "real-time path modification")
-    StartRealTimeMod = _unsupported("StartRealTimeMod", "real-time path modification")
-    SetSpeeds = _unsupported("SetSpeeds", "velocity control mode")
-    StartVelocityCntrl = _unsupported("StartVelocityCntrl", "velocity control mode")
-    SetTorques = _unsupported("SetTorques", "torque control mode")
-    StartTorqueCntrl = _unsupported("StartTorqueCntrl", "torque control mode")
-    StartSpeedDAC = _unsupported("StartSpeedDAC", "the cell has no analog outputs")
-    Trigger = _unsupported("Trigger", "motion triggers are not implemented")
+    Arc = codes.unsupported("Move.Arc", "circular interpolation is not implemented")
+    Circle = codes.unsupported("Move.Circle", "circular interpolation is not implemented")
+    Extra = codes.unsupported("Move.Extra", "the cell has no extra axes")
+    ForceOverlap = codes.unsupported("Move.ForceOverlap", "the twin does not blend motions")
+    SetJogCommand = codes.unsupported("Move.SetJogCommand", "jog mode needs a pendant")
+    StartJogMode = codes.unsupported("Move.StartJogMode", "jog mode needs a pendant")
+    SetRealTimeMod = codes.unsupported("Move.SetRealTimeMod", "real-time path modification")
+    StartRealTimeMod = codes.unsupported("Move.StartRealTimeMod", "real-time path modification")
+    SetSpeeds = codes.unsupported("Move.SetSpeeds", "velocity control mode")
+    StartVelocityCntrl = codes.unsupported("Move.StartVelocityCntrl", "velocity control mode")
+    SetTorques = codes.unsupported("Move.SetTorques", "torque control mode")
+    StartTorqueCntrl = codes.unsupported("Move.StartTorqueCntrl", "torque control mode")
+    StartSpeedDAC = codes.unsupported("Move.StartSpeedDAC", "the cell has no analog outputs")
+    Trigger = codes.unsupported("Move.Trigger", "motion triggers are not implemented")
 

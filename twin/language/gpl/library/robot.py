@@ -20,14 +20,6 @@ from .state import check_robot, robot_state, to_gpl_angles, tool_pose
 POWER_STATE_OFF, POWER_STATE_ON = 0, 20
 
 
-def _hardware(cls_name: str, name: str, why: str):
-    def member(rt, *args):
-        raise codes.fail(codes.NOT_SUPPORTED, f"{cls_name}.{name} ({why})")
-
-    member.__name__ = name
-    return shared(member)
-
-
 @gpl_class("Robot")
 class Robot:
     """The global Robot class."""
@@ -178,12 +170,12 @@ class Robot:
         check_robot(robot)
         return 0
 
-    JointToMotor = _hardware("Robot", "JointToMotor", "the twin has no motor encoders")
-    MotorToJoint = _hardware("Robot", "MotorToJoint", "the twin has no motor encoders")
-    DefLinComp = _hardware("Robot", "DefLinComp", "the twin has no motor encoders")
-    MotorTempStatus = _hardware("Robot", "MotorTempStatus", "motor temperatures are not simulated")
-    Custom = _hardware("Robot", "Custom", "kinematic-module parameters")
-    RealTimeModAcm = _hardware("Robot", "RealTimeModAcm", "real-time path modification")
+    JointToMotor = codes.unsupported("Robot.JointToMotor", "the twin has no motor encoders")
+    MotorToJoint = codes.unsupported("Robot.MotorToJoint", "the twin has no motor encoders")
+    DefLinComp = codes.unsupported("Robot.DefLinComp", "the twin has no motor encoders")
+    MotorTempStatus = codes.unsupported("Robot.MotorTempStatus", "motor temperatures are not simulated")
+    Custom = codes.unsupported("Robot.Custom", "kinematic-module parameters")
+    RealTimeModAcm = codes.unsupported("Robot.RealTimeModAcm", "real-time path modification")
 
 
 @gpl_class("Controller")
@@ -276,10 +268,10 @@ class Controller:
     def set_RecordButton(rt, value) -> None:
         """Clearing the latched flag is accepted; there is no pendant to set it."""
 
-    Command = _hardware("Controller", "Command", "console commands")
-    ErrorLog = _hardware("Controller", "ErrorLog", "the system error log")
-    Load = _hardware("Controller", "Load", "one project per run")
-    Unload = _hardware("Controller", "Unload", "one project per run")
-    PDb = _hardware("Controller", "PDb", "the parameter database")
-    PDbNum = _hardware("Controller", "PDbNum", "the parameter database")
+    Command = codes.unsupported("Controller.Command", "console commands")
+    ErrorLog = codes.unsupported("Controller.ErrorLog", "the system error log")
+    Load = codes.unsupported("Controller.Load", "one project per run")
+    Unload = codes.unsupported("Controller.Unload", "one project per run")
+    PDb = codes.unsupported("Controller.PDb", "the parameter database")
+    PDbNum = codes.unsupported("Controller.PDbNum", "the parameter database")
 
