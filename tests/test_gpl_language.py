@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from gpl_helpers import error_of, output_of
+from gpl_helpers import error_of, output_of, run_gpl
 from twin.errors import ProgramError
 from twin.language.gpl.runtime import GplSystem
 
@@ -51,3 +51,784 @@ Module M
 End Module
 """)
     assert lines(out) == ["6", "12"]
+
+
+def test_declarations_share_the_next_type_and_initialise():
+    """Ch. 4 (L718-734): `Dim n As Integer, x As Double`, `Dim ii, jj As Integer`
+    (both Integer), `Dim Count As Integer = 1`; Strings start empty."""
+    out = output_of("""
+Module M
+    Public Sub Main()
+        Dim n As Integer, x As Double
+        Dim ii, jj As Integer
+        Dim Count As Integer = 1
+        Dim s As String
+        ii = 2.6
+        jj = 1.4
+        x = 2.6
+        Console.WriteLine(ii & " " & jj & " " & x & " " & Count & " [" & s & "]")
+    End Sub
+End Module
+""")
+    assert out == "3 1 2.6 1 []\n"
+
+
+def test_static_keeps_its_value_dim_does_not():
+    """Ch. 4 (L668-679): Dim locals are re-initialised on every call, Static ones
+    keep their value."""
+    out = output_of("""
+Module M
+    Sub Counter()
+        Dim ii As Short
+        Static jj As Short
+        ii += 1
+        jj += 1
+        Console.WriteLine(ii & " " & jj)
+    End Sub
+    Public Sub Main()
+        Counter()
+        Counter
+        Call Counter()
+    End Sub
+End Module
+""")
+    assert lines(out) == ["1 1", "1 2", "1 3"]
+
+
+def test_public_names_qualified_and_unqualified():
+    """Ch. 4 "Scope of Names" (L696-710, L833-851): `Test1.aa` picks one of two
+    Public aa; an unambiguous Public name needs no module name."""
+    out = output_of("""
+Module Test1
+    Public aa As Integer
+    Public bb As Integer
+End Module
+Module Test2
+    Public aa As Integer
+End Module
+Module Test3
+    Public Sub Main()
+        Test1.aa = 5
+        Test2.aa = 7
+        bb = 9
+        Console.WriteLine(Test1.aa & " " & Test2.aa & " " & Test1.bb)
+    End Sub
+End Module
+""")
+    assert out == "5 7 9\n"
+
+
+def test_ambiguous_public_name_is_a_compile_error():
+    """Ch. 4 (L694-710): the same Public name in two modules must be qualified."""
+    with pytest.raises(ProgramError) as err:
+        output_of("""
+Module Test1
+    Public aa As Integer
+End Module
+Module Test2
+    Public aa As Integer
+End Module
+Module Test3
+    Public Sub Main()
+        aa = 1
+    End Sub
+End Module
+""")
+    assert err.value.code == -2009 and err.value.line == 10
+
+
+def test_private_class_member_is_rejected():
+    """Ch. 5 "Class Procedures" (L1052-1080): `aa.size_in = 5` is invalid since
+    size_in is Private; the Property clips to 0..10 and Main writes 10."""
+    source = """
+Public Class cc
+    Private size_in As Integer
+    Public Property Size As Integer
+        Get
+            Return size_in
+        End Get
+        Set (value As Integer)
+            If value > 10 Then
+                value = 10
+            ElseIf value < 0 Then
+                value = 0
+            End If
+            size_in = value
+        End Set
+    End Property
+End Class
+Module M
+    Public Sub Main()
+        Dim aa As New cc
+        Dim ii As Integer
+        aa.Size = 20
+        ii = aa.Size
+        Console.WriteLine(ii)
+        PRIVATE_LINE
+    End Sub
+End Module
+"""
+    assert output_of(source.replace("PRIVATE_LINE", "")) == "10\n"
+    with pytest.raises(ProgramError) as err:
+        output_of(source.replace("PRIVATE_LINE", "aa.size_in = 5"))
+    assert err.value.code == -2008 and "size_in" in err.value.message
+
+
+def test_class_fields_and_instance_methods():
+    """Ch. 5 "Class Procedures" (L1008-1044): two objects of class cc, each with
+    its own count; Increment works on the object it is called for: 6 and 21."""
+    out = output_of("""
+Public Class cc
+    Public count As Integer
+    Public Sub Increment
+        count = count+1
+    End Sub
+End Class
+Sub Main()
+    Dim aa As New cc
+    Dim bb As New cc
+    aa.count = 5
+    aa.Increment
+    bb.count = 20
+    bb.Increment
+    Console.WriteLine(aa.count)
+    Console.WriteLine(bb.count)
+End Sub
+""")
+    assert lines(out) == ["6", "21"]
+
+
+def test_overloaded_constructors():
+    """Ch. 5 "Constructors" (L1094-1111): New cc calls the first New (count 25),
+    New cc(15) the second."""
+    out = output_of("""
+Public Class cc
+    Public count As Integer
+    Public Sub New
+        count = 25
+    End Sub
+    Public Sub New (value As Integer)
+        count = value
+    End Sub
+End Class
+Sub Main()
+    Dim aa As New cc
+    Dim bb As New cc(15)
+    Console.WriteLine(bb.count)
+    Console.WriteLine(aa.count)
+End Sub
+""")
+    assert lines(out) == ["15", "25"]
+
+
+def test_me_and_shared_members():
+    """Ch. 5: Me is the current object; a Shared field has one copy (Class.item)."""
+    out = output_of("""
+Public Class node
+    Public Shared made As Integer
+    Public value As Integer
+    Public Sub New(v As Integer)
+        value = v
+        made += 1
+    End Sub
+    Public Function Self() As node
+        Return Me
+    End Function
+End Class
+Sub Main()
+    Dim a As New node(3)
+    Dim b As New node(4)
+    Console.WriteLine(node.made & " " & (a.Self() Is a) & " " & (a Is b) & " " & b.Self.value)
+End Sub
+""")
+    assert out == "2 True False 4\n"
+
+
+def test_object_reference_copy_versus_clone():
+    """Ch. 5 "Copying Object Variables and Values" and "Clone Method"
+    (L937-960): assignment copies the pointer, Clone an independent value."""
+    out = output_of("""
+Sub Main()
+    Dim My_Loc1 As New Location
+    Dim My_Loc2 As Location
+    Dim Same As Location
+    Dim tmp As Double
+    My_Loc1.X = 10
+    My_Loc2 = My_Loc1.Clone
+    Same = My_Loc1
+    tmp = My_Loc2.X
+    My_Loc1.X = 20
+    Console.WriteLine(tmp & " " & My_Loc2.X & " " & Same.X)
+End Sub
+""")
+    assert out == "10 10 20\n"
+
+
+def test_objects_byval_and_byref():
+    """Ch. 5 "Objects as Procedure Arguments" and ch. 10 "Procedure Arguments":
+    ByVal lets the callee change the object but not the caller's variable; ByRef
+    re-points the caller's variable; ByRef numbers are written back."""
+    out = output_of("""
+Class box
+    Public tag As String
+End Class
+Sub Repoint(ByVal o As box, ByRef r As box)
+    o.tag = "changed"
+    o = New box
+    o.tag = "lost"
+    r = New box
+    r.tag = "new"
+End Sub
+Sub Swap(ByRef a As Integer, ByRef b As Integer)
+    Dim t As Integer
+    t = a
+    a = b
+    b = t
+End Sub
+Sub Main()
+    Dim o1 As New box, o2 As New box
+    Dim x As Integer = 1, y As Integer = 2
+    o1.tag = "one"
+    o2.tag = "two"
+    Repoint(o1, o2)
+    Swap(x, y)
+    Console.WriteLine(o1.tag & " " & o2.tag & " " & x & " " & y)
+End Sub
+""")
+    assert out == "changed new 2 1\n"
+
+
+def test_operators_and_precedence():
+    """Ch. 6 Table 6-1 (L1129-1148): ^ above unary minus, / real, \\ truncates,
+    Mod real remainder, And/Or bitwise on integers, logical on Booleans,
+    shifts arithmetic, Not False is True (-1)."""
+    out = output_of("""
+Sub Main()
+    Console.WriteLine(2 * -4 & " " & -2 ^ 2 & " " & 7 / 2 & " " & 2.3 \\ 2 & " " & 13.3 Mod 2)
+    Console.WriteLine((6 And 3) & " " & (5 Or 2) & " " & (6 Xor 3) & " " & (True And False) & " " & (True Or False))
+    Console.WriteLine((1 << 4) & " " & (-16 >> 2) & " " & CInt(Not False) & " " & (Not 0))
+    Console.WriteLine(2.34 + "1.01")
+    Console.WriteLine("ab" + "cd" & 1 + 2)
+End Sub
+""")
+    assert lines(out) == ["-8 -4 3.5 1 1.3", "2 7 5 False True", "16 -4 -1 -1", "3.35", "abcd3"]
+
+
+def test_hex_octal_and_string_literals():
+    """Ch. 4 (L650-652) &H and &O constants; ch. 7 (L1204) "" inside a literal."""
+    out = output_of('''
+Sub Main()
+    Console.WriteLine(&H1F & " " & &O17 & " " & "Tom said, ""Hello world""")
+End Sub
+''')
+    assert out == '31 15 Tom said, "Hello world"\n'
+
+
+def test_compound_assignment_operators():
+    """Ch. 8 Table 8-1 (L1313-1324): ^= *= /= \\= += -= <<= >>= &=."""
+    out = output_of("""
+Sub Main()
+    Dim x As Double = 2
+    Dim i As Integer = 7
+    Dim s As String = "a"
+    x ^= 3
+    x *= 3
+    x /= 4
+    i \\= 2
+    i += 10
+    i -= 1
+    i <<= 2
+    i >>= 1
+    s &= " more"
+    Console.WriteLine(x & " " & i & " " & s)
+End Sub
+""")
+    assert out == "6 24 a more\n"
+
+
+def test_control_structures():
+    """Ch. 9: If/ElseIf/Else, single-line If, For with negative Step, While,
+    Do While/Until before and after, Exit For/Do/While, Select with lists,
+    ranges and Is."""
+    out = output_of("""
+Sub Main()
+    Dim n As Integer, s As String
+    For n = 10 To 1 Step -3
+        s &= n & " "
+    Next n
+    Console.WriteLine(s)
+    n = 0
+    While True
+        n += 1
+        If n = 4 Then Exit While
+    End While
+    Do While n < 10
+        n += 2
+        If n = 8 Then Exit Do
+    Loop
+    Console.WriteLine(n)
+    Do
+        n -= 3
+    Loop Until n < 0
+    Console.WriteLine(n)
+    Do Until n >= 2
+        n += 1
+    Loop
+    Do
+        n += 1
+    Loop While n < 5
+    Console.WriteLine(n)
+    For n = 0 To 7
+        Select Case n
+            Case 0
+                s = "zero"
+            Case 1, 2
+                s = "one or two"
+            Case 3 To 5
+                s = "three to five"
+            Case Is >= 7
+                s = "seven up"
+            Case Else
+                s = "else"
+        End Select
+        If n = 0 Then
+            Console.Write(s)
+        ElseIf n < 7 Then
+            Console.Write("," & s)
+        Else
+            Console.WriteLine("," & s)
+        End If
+    Next
+End Sub
+""")
+    assert lines(out) == [
+        "10 7 4 1 ", "8", "-1", "5",
+        "zero,one or two,one or two,three to five,three to five,three to five,else,seven up",
+    ]
+
+
+def test_select_on_strings_and_exit_select():
+    """Ch. 9 Select (L1426-1451): String match values; Exit Select."""
+    out = output_of("""
+Sub Main()
+    Dim c As String = "blue"
+    Select c
+        Case "red"
+            Console.WriteLine("r")
+        Case "bl" & "ue", "navy"
+            Console.WriteLine("b")
+            Exit Select
+            Console.WriteLine("not here")
+    End Select
+End Sub
+""")
+    assert out == "b\n"
+
+
+def test_goto_forward_and_backward():
+    """Ch. 9 "GoTo Statements" (L1338-1348): labels are names or numbers with a colon."""
+    out = output_of("""
+Sub Main()
+    Dim i As Integer
+top:
+    i += 1
+    If i < 3 Then GoTo top
+    GoTo 100
+    Console.WriteLine("skipped")
+100: Console.WriteLine("i=" & i)
+End Sub
+""")
+    assert out == "i=3\n"
+
+
+def test_arrays_bounds_length_redim():
+    """Ch. 4 "Data Type Arrays" (L766-817): Dim Count(9) has 10 elements, (3, 4)
+    has 20, ReDim re-sizes, GetUpperBound/Length/Rank; an index past the upper
+    bound stops the program with file and line."""
+    source = """
+Sub Main()
+    Dim Count(9) As Integer
+    Dim MyArray(3, 4) As Integer
+    Dim TwoD(,) As Integer
+    Dim sarray(3) As String
+    Dim ii As Integer
+    For ii = 0 To 9
+        Count(ii) = ii * ii
+    Next
+    MyArray(3, 4) = 7
+    ReDim TwoD(1, 100)
+    Console.WriteLine(Count.Length & " " & Count(9) & " " & MyArray.Length & " " & MyArray.Rank & " " & MyArray(3, 4))
+    Console.WriteLine(TwoD.GetUpperBound(1) & " " & sarray.Length & " " & sarray(0).Length)
+    ReDim Count(19)
+    Console.WriteLine(Count.Length & " " & Count(3))
+    Count(20) = 1
+End Sub
+"""
+    system, thread = run_gpl(source)
+    assert lines(system.console.output) == ["10 81 20 2 7", "100 4 0", "20 0"]
+    assert thread.error.code == -704 and thread.error.line == 17 and thread.error.column == 5
+
+
+def test_string_members_and_functions():
+    """Ch. 7 Tables 7-1 and 7-2: members are 0-based (IndexOf, Substring), the
+    compatibility functions 1-based (Instr, Mid); comparisons are case-sensitive."""
+    out = output_of("""
+Sub Main()
+    Dim s As String = "  Hello World  "
+    Dim t As String
+    Dim parts() As String
+    t = s.Trim
+    parts = t.Split(" ")
+    Console.WriteLine(t.Length & "|" & t.ToUpper & "|" & t.ToLower & "|" & t.Substring(6) & "|" & t.Substring(0, 5))
+    Console.WriteLine(t.IndexOf("o") & " " & t.IndexOf("o", 5) & " " & t.IndexOf("z") & " " & Instr(1, t, "World") & " " & Instr(1, t, "z"))
+    Console.WriteLine(Mid(t, 7, 5) & "|" & Len(s) & "|" & UCase("a") & LCase("B") & "|" & Asc("A") & Chr(66))
+    Console.WriteLine(parts.Length & " " & parts(1) & " " & ("A" = "a") & " " & String.Compare("A", "a", True) & " " & String.Compare("a", "b"))
+    Console.WriteLine(s.TrimStart & "|" & s.TrimEnd & "|" & CStr(1.5) & "|" & Hex(255) & "|" & Format(3.14159, "0.00"))
+End Sub
+""")
+    assert lines(out) == [
+        "11|HELLO WORLD|hello world|World|Hello",
+        "4 7 -1 7 0",
+        "World|15|Ab|65B",
+        "2 World False 0 -1",
+        "Hello World  |  Hello World|1.5|FF|3.14",
+    ]
+
+
+def test_conversion_functions_and_ranges():
+    """Ch. 4 Table 4-3 (CBool ... CStr, Hex) and Table 4-1 ranges: a Byte holds
+    0-255, a Short -32768..32767; out of range is an overflow error."""
+    out = output_of("""
+Sub Main()
+    Dim e As New Exception
+    Dim b As Byte
+    Dim sh As Short
+    Console.WriteLine(CInt("42") & " " & CDbl("2.5") & " " & CBool(0) & " " & CBool(3) & " " & CByte(255) & " " & CShort(-32768) & " " & CInt(2.5) & " " & CInt(3.5))
+    Console.WriteLine(Fix(-2.5) & " " & Int(-2.5) & " " & Math.Sqrt(16) & " " & Math.Sin(90) & " " & Math.Max(3, 4) & " " & Math.Abs(-2) & " " & Math.Atan2(1, 1))
+    Try
+        b = 256
+    Catch e
+        Console.WriteLine(e.ErrorCode & " " & e.Message)
+    End Try
+    Try
+        sh = 40000
+    Catch e
+        Console.WriteLine(e.ErrorCode)
+    End Try
+End Sub
+""")
+    assert lines(out) == [
+        "42 2.5 False True 255 -32768 2 4",
+        "-2 -3 4 1 4 2 45",
+        "-703 Numeric overflow: 256 as Byte",
+        "-703",
+    ]
+
+
+def test_exception_in_called_procedure_is_caught_by_caller():
+    """Ch. 11 (L1694-1713): the divide by 0 in test ends test and the Try in
+    MAIN: the only output is "Exception!"."""
+    out = output_of("""
+Public Sub MAIN
+    Dim exc1 As New Exception
+    Try
+        test()
+        Console.WriteLine("Test completed") ' Never gets here
+    Catch exc1
+        Console.WriteLine("Exception!")      ' Is executed
+    End Try
+End Sub
+Public Sub test()
+    Dim ii As Integer
+    ii = 1 / 0                              ' Generates exception
+    Console.WriteLine("Inside Test")        ' Never gets here
+End Sub
+""", start="MAIN")
+    assert out == "Exception!\n"
+
+
+def test_finally_runs_while_the_exception_goes_to_the_caller():
+    """Ch. 11 (L1715): a Try with only Finally runs the Finally before the
+    exception reaches the caller's Catch; Exit Try goes to the Finally; Throw
+    re-raises a caught exception to an outer Try."""
+    out = output_of("""
+Sub Inner()
+    Dim x As Integer
+    Try
+        x = 1 / 0
+    Finally
+        Console.WriteLine("finally")
+    End Try
+End Sub
+Sub Main()
+    Dim exc As Exception
+    Dim outer As New Exception
+    Try
+        Inner()
+    Catch exc
+        Console.WriteLine("caught " & exc.ErrorCode & " " & exc.Message)
+    End Try
+    Try
+        Console.WriteLine("before")
+        Exit Try
+        Console.WriteLine("not here")
+    Catch exc
+    Finally
+        Console.WriteLine("finally 2")
+    End Try
+    Try
+        Try
+            Throw New Exception(-786)
+        Catch exc
+            Console.WriteLine("inner " & exc.ErrorCode)
+            Throw exc
+        End Try
+    Catch outer
+        Console.WriteLine("outer " & outer.ErrorCode & " " & outer.Message)
+    End Try
+End Sub
+""")
+    assert lines(out) == [
+        "finally", "caught -702 Divide by zero", "before", "finally 2", "inner -786",
+        "outer -786 Project generated error",
+    ]
+
+
+def test_retry_goto_from_catch_into_try():
+    """Ch. 11 (L1719-1736): a GoTo in the Catch may jump back into its Try
+    (retry, lowering a profile's speed by 10% each time); GoTo out of the Catch
+    to a label after End Try is illegal."""
+    source = """
+Sub Main()
+    Dim exc1 As New Exception
+    Dim attempts As Integer
+    Dim speed As Double = 100
+    Try
+retry:
+        attempts += 1
+        If speed > 75 Then Throw New Exception(-153)
+        Console.WriteLine("moved at " & Format(speed, "0.0") & " after " & attempts)
+    Catch exc1
+        If (exc1.ErrorCode = -153) Then
+            speed *= .9
+            GoTo retry ' LEGAL BRANCH
+        End If
+        BAD
+    End Try
+bad_jump:
+End Sub
+"""
+    assert output_of(source.replace("BAD", "")) == "moved at 72.9 after 4\n"
+    with pytest.raises(ProgramError) as err:
+        output_of(source.replace("BAD", "GoTo bad_jump ' ILLEGAL!!!"))
+    assert err.value.code == -2011 and err.value.line == 16
+
+
+def test_throw_of_error_code_zero_is_invalid():
+    """GPL Dictionary (digest §7): a thrown Exception needs a negative ErrorCode."""
+    error = error_of("""
+Sub Main()
+    Dim e As New Exception
+    Throw e
+End Sub
+""")
+    assert error.code == -807 and error.line == 4
+
+
+def test_uncaught_error_reports_file_line_column_and_procedure():
+    """Ch. 11 (L1713): an uncaught exception halts the thread and reports it."""
+    error = error_of("""
+Module Cell
+    Public Sub Main()
+        Step2()
+    End Sub
+    Sub Step2()
+        Dim loc As Location
+        Console.WriteLine(loc.X)
+    End Sub
+End Module
+""")
+    assert (error.code, error.file, error.line, error.column) == (-705, "test.gpl", 8, 9)
+    assert error.program == "Cell.Step2" and "loc.X" in error.text
+
+
+def test_delegates_from_addressof_and_string():
+    """Ch. 10 "Delegates" (L1530-1568): an array of delegates, made with
+    AddressOf and with a String, called as del_obj(index)(3)."""
+    out = output_of("""
+Delegate Function My_template(ByVal arg1 As Integer) As String
+Public Function f0 (ByVal mode As Integer) As String
+    Return "f0:" & CStr(mode)
+End Function
+Public Function f1 (ByVal mode As Integer) As String
+    Return "f1:" & CStr(mode)
+End Function
+Sub Main()
+    Dim del_obj(1) As My_template
+    Dim str As String
+    Dim index As Integer
+    del_obj(0) = New My_template(AddressOf f0)
+    del_obj(1) = New My_template("f1")
+    For index = 0 To 1
+        str = del_obj(index)(3)   ' Call f0 or f1 with mode = 3
+        Console.WriteLine(str)
+    Next
+End Sub
+""")
+    assert lines(out) == ["f0:3", "f1:3"]
+
+
+def test_delegate_binds_the_object_at_creation():
+    """Ch. 10 (L1600-1632): AddressOf my_obj.My_fn saves the object; assigning
+    my_obj later does not change the delegate's target."""
+    out = output_of("""
+Delegate Function My_template(ByVal arg1 As Integer) As String
+Class My_class
+    Public tag As String
+    Public Function My_fn(ByVal mode As Integer) As String
+        Return tag & "(" & mode & ")"
+    End Function
+End Class
+Public Sub Test
+    Dim my_obj As New My_class
+    Dim del_obj As My_template
+    my_obj.tag = "first"
+    del_obj = New My_template(AddressOf my_obj.My_fn)
+    my_obj = New My_class
+    my_obj.tag = "second"
+    Console.Writeline(del_obj(3))
+End Sub
+""", start="Test")
+    assert out == "first(3)\n"
+
+
+def test_delegate_signature_must_match():
+    """Ch. 10 (L1562): a procedure that does not match the Delegate statement is
+    a compile error."""
+    with pytest.raises(ProgramError) as err:
+        output_of("""
+Delegate Function My_template(ByVal arg1 As Integer) As String
+Public Function f2 (ByVal mode As String) As String
+    Return mode
+End Function
+Sub Main()
+    Dim d As My_template
+    d = New My_template(AddressOf f2)
+End Sub
+""")
+    assert err.value.code == -2004 and err.value.line == 8
+
+
+def test_threads_share_module_variables_and_lock_with_test_and_set():
+    """Ch. 18 (L3351-3367): threads started with New Thread / Start / Join; an
+    increment guarded by a Thread.TestAndSet lock is exact."""
+    out = output_of("""
+Module M
+    Public my_lock As Integer
+    Public total As Integer
+    Public Sub Worker()
+        Dim i As Integer
+        For i = 1 To 50
+            While Thread.TestAndSet(my_lock, 1) <> 0
+                Thread.Sleep(0)
+            End While
+            total = total + 1
+            my_lock = 0
+            If i Mod 10 = 0 Then Thread.Sleep(5)
+        Next
+    End Sub
+    Public Sub Main()
+        Dim t1 As New Thread("Worker")
+        Dim t2 As New Thread("M.Worker")
+        t1.Start
+        t2.Start
+        t1.Join(-1)
+        t2.Join(-1)
+        Console.WriteLine("total " & total)
+    End Sub
+End Module
+""")
+    assert out == "total 100\n"
+
+
+def test_module_initialisers_and_init_run_before_the_start_procedure():
+    """Ch. 4 (L742) and ch. 10 "Special Initialization" (L1658-1664): module
+    variables are initialised in order, then Init, before the start procedure."""
+    out = output_of("""
+Module A
+    Public base As Integer = 40
+    Public home As New Location
+    Public Sub Init
+        home.XYZ(base, 2, 3)
+        Console.WriteLine("A.Init")
+    End Sub
+End Module
+Module B
+    Public Sub Main()
+        Console.WriteLine("Main " & home.X & " " & base)
+    End Sub
+End Module
+""")
+    assert lines(out) == ["A.Init", "Main 40 40"]
+
+
+def test_me_outside_a_class_is_an_error():
+    """Ch. 5 "Me Object" (L1082-1084): using Me outside a class procedure raises
+    an exception."""
+    error = error_of("""
+Sub Main()
+    Console.WriteLine(Me Is Nothing)
+End Sub
+""")
+    assert error.code == -709
+
+
+def test_syntax_error_has_file_line_column_and_text():
+    """A user's mistake gives file, line, column and the offending text."""
+    with pytest.raises(ProgramError) as err:
+        output_of("""
+Sub Main()
+    Dim x As Integer
+    x = (3 + 
+End Sub
+""")
+    assert err.value.code == -2001 and err.value.file == "test.gpl" and err.value.line == 5
+
+
+def test_unsupported_and_undeclared():
+    """Ch. 4: every variable is declared ("Undefined symbol" otherwise, L825);
+    `As Object` and the VB types of Table 4-2 are rejected."""
+    for body, code in (("x = 1", -2002), ("Dim o As Object", -2010), ("Dim l As Long", -2010)):
+        with pytest.raises(ProgramError) as err:
+            output_of(f"Sub Main()\n    {body}\nEnd Sub\n")
+        assert err.value.code == code and err.value.line == 2
+
+
+def test_project_folder_with_gpo_globals(tmp_path):
+    """Ch. 17 (L3222-3244): Project.gpr lists the files and the start procedure;
+    a .gpo module's Init creates the global Location and Profile objects."""
+    (tmp_path / "Project.gpr").write_text(
+        "' project\nProjectBegin\nProjectName=\"Demo\"\nProjectStart=\"Main\"\n"
+        "ProjectSource=\"Globals.gpo\"\nProjectSource=\"Main.gpl\"\nProjectEnd\n"
+    )
+    (tmp_path / "Globals.gpo").write_text(
+        "Module Globals\n    Public safe As Location\n    Public fast As Profile\n"
+        "    Public Sub Init\n        safe = New Location\n        safe.XYZ(300, 0, 200, 0, 180, 0)\n"
+        "        fast = New Profile\n        fast.Speed = 50\n    End Sub\nEnd Module\n"
+    )
+    (tmp_path / "Main.gpl").write_text(
+        "Module Main\n    Public Sub Main()\n        Console.WriteLine(safe.Z & \" \" & fast.Speed)\n"
+        "    End Sub\nEnd Module\n"
+    )
+    from gpl_helpers import Clock, NoRobot
+    from twin.controller.io import DigitalIO
+    from twin.controller.scheduler import Scheduler
+    from twin.language.vplus.runtime import Console
+
+    scheduler = Scheduler()
+    system = GplSystem(NoRobot(), DigitalIO(), Clock(), scheduler, Console(echo=None))
+    assert system.load_project(tmp_path) == "Main"
+    thread = system.start()
+    while scheduler.alive:
+        scheduler.run_cycle()
+    assert thread.error is None and system.console.output == "200 50\n"

@@ -181,7 +181,9 @@ class ProjectCompiler:
 
         for m in members:
             mods = getattr(m, "modifiers", [])
-            public = "public" in mods
+            # Items written at the top of a file, outside any Module (as the
+            # manual's examples do), are Public: `Sub Main()` can start a project.
+            public = "public" in mods or (module.node.implicit and cls is None and "private" not in mods)
             shared = "shared" in mods
             if isinstance(m, ast.Declare):
                 for d in m.items:

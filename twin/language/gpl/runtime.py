@@ -395,7 +395,7 @@ class GplSystem:
     # ---- errors
     def locate(self, err: GplError, tb, thread_procedure: str) -> ProgramError:
         """The error as a ProgramError at the innermost GPL statement."""
-        located = ProgramError(err.message, err.code, program=thread_procedure)
+        located = ProgramError(err.message, err.code)
         for frame, lineno in reversed(list(traceback.walk_tb(tb))):
             filename = frame.f_code.co_filename
             if filename.startswith("<gpl:"):
@@ -407,7 +407,7 @@ class GplSystem:
                     located.located(file=unit.file, line=line, column=column, program=unit.name,
                                     text=lines[line - 1] if 0 < line <= len(lines) else None)
                     break
-        return located
+        return located.located(program=thread_procedure)
 
 
 class GplThread:
