@@ -135,8 +135,11 @@ class ProjectCompiler:
 
     # ------------------------------------------------------------ declaration pass
     def compile(self) -> CompiledProject:
+        declared = {m.key for source in self.files for m in source.modules if not m.implicit}
         for source in self.files:
             for module in source.modules:
+                while module.implicit and module.key in declared | set(self.modules):
+                    module.name += "_"  # top-of-file items of Bench.gpl beside a Module Bench
                 if module.key in self.modules:
                     raise _error(DUPLICATE_SYMBOL, f"module {module.name}", source.path, module)
                 sym = ModuleSym(module.name, source.path, module)

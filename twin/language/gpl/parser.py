@@ -434,7 +434,7 @@ def parse(text: str, file: str = "<string>") -> ast.SourceFile:
         else:
             loose.append(item)
     if loose:
-        stem = Path(file).stem or "main"
+        stem = re.sub(r"\W", "_", Path(file).stem) or "main"
         source.modules.append(ast.Module(stem, loose, file, line=1, implicit=True))
     return source
 
