@@ -914,3 +914,162 @@ def test_hardware_members_say_why_they_are_missing(rt):
         with pytest.raises(GplError) as err:
             call()
         assert err.value.code == -3103 and reason in err.value.message
+
+
+# ------------------------------------------------------------ through the interpreter
+def test_refframe_and_clone_examples_as_gpl_source():
+    """E27 (L2027-2034, `refl` read as `ref1`) and E11 (L951-960) run as GPL source:
+    indexed and chained members, Clone, reference assignment."""
+    from gpl_helpers import output_of
+
+    out = output_of("""
+Module Test
+    Public Sub Main()
+        Dim loc1 As New Location            ' loc1 set to Cartesian Loc
+        Dim ref1 As New RefFrame
+        loc1.RefFrame = ref1                ' loc1 with respect to ref1
+        ref1.Loc.XYZ(10,20,30,0,180,20)     ' Set ref1 Pos
+        Console.WriteLine(CStr(loc1.Pos.X) & " " & CStr(loc1.Pos.Pitch) & " " & CStr(loc1.Pos.Roll))
+        Dim My_Loc1 As New Location
+        Dim My_Loc2, alias As Location
+        My_Loc1.X = 10
+        My_Loc2 = My_Loc1.Clone
+        alias = My_Loc1
+        My_Loc1.X = 20
+        Console.WriteLine(CStr(My_Loc2.X) & " " & CStr(alias.X))
+        Dim joints As New Location
+        joints.Type = 1
+        joints.Angle(2) = 45
+        Console.WriteLine(joints.Angle(2))
+        Signal.DIO(7) = True
+        Console.WriteLine(Signal.DIO(7))
+    End Sub
+End Module
+""")
+    assert out == "10 180 20\n10 20\n45\nTrue\n"
+
+
+def test_show_dialog_and_xml_byref_as_gpl_source(tmp_path):
+    """ByRef arguments of built-ins through the interpreter: E29 (L2110-2118, `but-ton`
+    rejoined) and XmlCreate (E51, ByRef doc) + SaveString(ByRef s) + XmlParse (E49)."""
+    from gpl_helpers import output_of
+
+    out = output_of("""
+Module Test
+    Public Sub Main()
+        Dim button As Integer
+        Controller.ShowDialog("Yes,No", "Do you like this pop-up?", button)
+        Controller.SystemMessage("Operator pressed button " & CStr(button))
+        Dim doc As XmlDoc
+        Dim text As String
+        XmlCreate(doc)
+        doc.SaveString(text)
+        doc = XmlDoc.LoadString(text)
+        XmlParse(doc)
+        doc.SaveFile("/flash/out.xml")
+    End Sub
+
+    Public Sub XmlParse(ByVal doc As XmlDoc)
+        Dim root As XmlNode
+        Dim command As XmlNode
+        Dim procedure As XmlNode
+        Dim ss As String
+        root = doc.DocumentElement
+        command = root.GetElementNode("command")
+        procedure = root.GetElementNode("procedure")
+        ss = root.GetAttribute("cellId")
+        Console.Writeline("cellId = " & ss)
+        ss = command.Value
+        Console.Writeline("command = " & ss)
+        ss = procedure.GetAttribute("jobId")
+        Console.Writeline("jobId = " & ss)
+        ss = procedure.GetElement("type")
+        Console.Writeline("type = " & ss)
+        ss = procedure.GetElement("testSet")
+        Console.Writeline("typeSet = " & ss)
+    End Sub
+
+    Public Sub XmlCreate(ByRef doc As XmlDoc)
+        Dim root As XmlNode
+        Dim elem As XmlNode
+        doc = New XmlDoc("procedureControl")
+        root = doc.DocumentElement
+        root.AddAttribute("cellId", "TestCell")
+        root.AddElement("command", "start")
+        elem = root.AddElementNode("procedure")
+        elem.AddAttribute("jobId", "090507001")
+        elem.AddAttribute("name", "INS")
+        elem.AddElement("type", "protocol")
+        elem.AddElement("testSet", "INS_#_090507001")
+        elem.AddElement("index", "0")
+    End Sub
+End Module
+""", sandbox=tmp_path)
+    assert out.splitlines() == [
+        "[SystemMessage] Do you like this pop-up? [Yes,No] -> 1",
+        "[SystemMessage] Operator pressed button 1",
+        "cellId = TestCell", "command = start", "jobId = 090507001", "type = protocol",
+        "typeSet = INS_#_090507001",
+    ]
+    assert "<procedureControl cellId=\"TestCell\">" in (tmp_path / "flash" / "out.xml").read_text()
+
+
+def test_telnet_server_as_gpl_source():
+    """E31 (L2330-2364) as GPL source, repaired as digest §14 says, with an E32-style
+    client in a second thread started by name; Socket.Receive fills its ByRef String."""
+    from gpl_helpers import output_of
+
+    port = _free_port()
+    out = output_of(f"""
+Module Net
+    Public Sub Main()
+        Dim client As New Thread("Net.Client")
+        client.Start()
+        Telnet()
+        client.Join(-1)
+    End Sub
+
+    Public Sub Telnet
+        Dim ep As New IPEndPoint("", {port})
+        Dim tl As New TcpListener(ep)
+        Dim ts As Socket
+        Dim recv As String
+        Dim send As String
+        Dim ii As Integer
+        tl.Start()
+        While Not tl.Pending()
+            Thread.Sleep(50)
+        End While
+        Console.Writeline("Connection request...")
+        ts = tl.AcceptSocket()
+        tl.Stop()
+        While True
+            ii = ts.Receive(recv, 1000)
+            Console.Writeline("Receive count: " & CStr(ii))
+            If ii = 0 Then
+                Exit While
+            End If
+            send = "Received: " & recv
+            ts.Send(send)
+        End While
+        Console.Writeline("Connection closed")
+        ts.Close()
+    End Sub
+
+    Public Sub Client()
+        Dim ep As New IPEndPoint("192.168.0.2", {port})
+        Dim tc As TcpClient
+        Dim sock As Socket
+        Dim reply As String
+        Thread.Sleep(100)
+        tc = New TcpClient(ep)
+        sock = tc.Client
+        sock.Send("abc")
+        sock.Receive(reply, 100)
+        Console.WriteLine("Reply: " & reply)
+        tc.Close()
+    End Sub
+End Module
+""")
+    assert out.splitlines() == ["Connection request...", "Receive count: 3", "Reply: Received: abc",
+                                "Receive count: 0", "Connection closed"]

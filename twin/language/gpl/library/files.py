@@ -22,6 +22,7 @@ from pathlib import Path
 from . import codes
 from ..values import GplArray, format_value
 from . import gpl_class, shared
+from .members import stored
 from .state import robot_state
 
 FOLDER_DEVICES = ("flash", "ROMDISK", "flash2", "flash3", "flash4", "flash5", "flash6", "flash7", "flash8")
@@ -181,7 +182,7 @@ class StreamWriter:
         self._path = path
         self._open = True
         self._pending: list[str] = []
-        self.NewLine = "\r\n"
+        self._newline = "\r\n"
         name = _nvram_name(path)
         if name is not None:
             files = robot_state(rt).nvram
@@ -189,14 +190,17 @@ class StreamWriter:
                 files.pop(name, None)
             self._nvram = _nvram(rt, name, switches, create=True)
             self._file = None
-            self.AutoFlush = True
+            self._autoflush = True
         else:
             self._nvram = None
             real = sandbox_path(rt, path)
             if not real.parent.is_dir():
                 raise codes.fail(codes.FILE_NOT_FOUND, f"{path} (no such folder)")
             self._file = open(real, "ab" if append else "wb")
-            self.AutoFlush = False
+            self._autoflush = False
+
+    AutoFlush = stored("_autoflush", bool)
+    NewLine = stored("_newline", str)
 
     def _check(self) -> None:
         if not self._open:
@@ -208,14 +212,14 @@ class StreamWriter:
 
     def WriteLine(self, value="") -> None:
         self._check()
-        self._emit(format_value(value) + str(self.NewLine))
+        self._emit(format_value(value) + self._newline)
 
     def _emit(self, text: str) -> None:
         if self._nvram is not None:
             self._nvram.append(text.encode("latin-1"))
             return
         self._pending.append(text)
-        if self.AutoFlush:
+        if self._autoflush:
             self.Flush()
 
     def Flush(self) -> None:

@@ -23,6 +23,7 @@ import struct
 from ..values import GplArray
 from . import codes
 from . import byref, gpl_class
+from .members import stored
 from .net import IPEndPoint, LOOPBACK
 from .thread import _wait_ms
 
@@ -56,7 +57,9 @@ class Modbus:
         self._sock: socket.socket | None = None
         self._transaction = 0
         self._buffer = b""
-        self.Timeout = 0
+        self._timeout = 0.0
+
+    Timeout = stored("_timeout", float)
 
     # ------------------------------------------------------------ transport
     def _connect(self) -> socket.socket:
@@ -77,7 +80,7 @@ class Modbus:
         self._transaction = (self._transaction + 1) & 0xFFFF
         pdu = bytes([function]) + payload
         sock.sendall(struct.pack(">HHHB", self._transaction, 0, len(pdu) + 1, UNIT_ID) + pdu)
-        timeout = float(self.Timeout)
+        timeout = self._timeout
         while True:
             frame = self._frame()
             if frame is not None:

@@ -24,6 +24,7 @@ import socket
 
 from . import codes
 from . import byref, gpl_class
+from .members import stored
 from .thread import _wait_ms
 
 LOOPBACK = "127.0.0.1"
@@ -45,8 +46,10 @@ def _readable(sock: socket.socket) -> bool:
 @gpl_class("IPEndPoint")
 class IPEndPoint:
     def __init__(self, rt, address="", port=0):
-        self.IPAddress = str(address)
+        self._address = str(address)
         self.Port = int(port)
+
+    IPAddress = stored("_address", str)
 
     @property
     def Port(self) -> int:
@@ -86,10 +89,14 @@ class Socket:
         self._rt = rt
         self._sock = sock
         sock.setblocking(False)
-        self.Blocking = True
-        self.ReceiveTimeout = 0
-        self.SendTimeout = 0
+        self._blocking = True
+        self._receive_timeout = 0.0
+        self._send_timeout = 0.0
         self._remote: IPEndPoint | None = None
+
+    Blocking = stored("_blocking", bool)
+    ReceiveTimeout = stored("_receive_timeout", float)
+    SendTimeout = stored("_send_timeout", float)  # sends on loopback never wait
 
     def _s(self) -> socket.socket:
         if self._sock is None:
@@ -141,9 +148,9 @@ class Socket:
         sock = self._s()
         if _readable(sock):
             return True
-        if not self.Blocking:
+        if not self._blocking:
             raise codes.fail(codes.SOCKET_TIMEOUT, "no data (non-blocking socket)")
-        timeout = float(self.ReceiveTimeout)
+        timeout = self._receive_timeout
         yield from _wait_ms(self._rt, timeout if timeout > 0 else -1, until=lambda: _readable(sock))
         if not _readable(sock):
             raise codes.fail(codes.SOCKET_TIMEOUT, f"nothing received in {timeout:g} ms")
@@ -201,12 +208,14 @@ class Socket:
 class TcpClient:
     def __init__(self, rt, endpoint=None):
         self._rt = rt
-        self.Client = Socket(rt, socket.socket(socket.AF_INET, socket.SOCK_STREAM))
+        self._client = Socket(rt, socket.socket(socket.AF_INET, socket.SOCK_STREAM))
         if endpoint is not None:
-            self.Client.Connect(endpoint)
+            self._client.Connect(endpoint)
+
+    Client = stored("_client", readonly=True)
 
     def Close(self) -> None:
-        self.Client.Close()
+        self._client.Close()
 
 
 @gpl_class("TcpListener")
@@ -272,7 +281,9 @@ class UdpClient:
         except OSError as err:
             sock.close()
             raise _socket_error(err) from None
-        self.Client = Socket(rt, sock)
+        self._client = Socket(rt, sock)
+
+    Client = stored("_client", readonly=True)
 
     def Close(self) -> None:
-        self.Client.Close()
+        self._client.Close()

@@ -34,8 +34,12 @@ def _io_number(number, write: bool) -> int:
     raise codes.fail(codes.INVALID_SIGNAL, str(number))
 
 
-def gripper_signal(rt) -> int:
-    return int(rt.robot.cell.scene.get("gripper", {}).get("gpl_signal", GRIPPER_SIGNAL))
+def gripper_signal(rt) -> int | None:
+    """The output wired to the gripper valve; None in a run without a cell."""
+    cell = getattr(rt.robot, "cell", None)
+    if cell is None:
+        return None
+    return int(cell.scene.get("gripper", {}).get("gpl_signal", GRIPPER_SIGNAL))
 
 
 @gpl_class("Signal")

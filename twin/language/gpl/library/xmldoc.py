@@ -27,6 +27,7 @@ from xml.parsers.expat import ExpatError
 from . import codes
 from . import byref, gpl_class, shared
 from .files import _read_bytes, sandbox_path
+from .members import stored
 
 TYPE_NAMES = {
     Node.ELEMENT_NODE: "element", Node.ATTRIBUTE_NODE: "attribute", Node.TEXT_NODE: "text",
@@ -48,8 +49,8 @@ class XmlDoc:
         self._rt = rt
         self._dom = minidom.Document()
         self._nodes: dict[int, XmlNode] = {}
-        self.ErrorCode = 0
-        self.Message = ""
+        self._error_code = 0
+        self._message = ""
         if root_name is not None:
             self._dom.appendChild(self._dom.createElement(str(root_name)))
 
@@ -75,6 +76,9 @@ class XmlDoc:
                 stack.extend(n.attributes.values())
 
     # ------------------------------------------------------------ members
+    ErrorCode = stored("_error_code", readonly=True)
+    Message = stored("_message", readonly=True)
+
     @property
     def DocumentElement(self) -> "XmlNode | None":
         return self.node(self._dom.documentElement)
@@ -107,7 +111,7 @@ class XmlDoc:
         try:
             doc._dom = minidom.parseString(str(text).encode("latin-1"))
         except ExpatError as err:
-            doc.ErrorCode, doc.Message = codes.XML_ERROR[0], f"XML parse error: {err}"
+            doc._error_code, doc._message = codes.XML_ERROR[0], f"XML parse error: {err}"
         return doc
 
     @shared
