@@ -1073,3 +1073,65 @@ End Module
 """)
     assert out.splitlines() == ["Connection request...", "Receive count: 3", "Reply: Received: abc",
                                 "Receive count: 0", "Connection closed"]
+
+
+def test_modbus_examples_as_gpl_source(modbus_slave):
+    """Modbus_Write_Example (L2668-2689, E36; name joined with underscores, End Sub added)
+    then Modbus_Read_Example (L2641-2662, E35; its truncated input loop completed) as GPL
+    source, the slave's port added to the endpoints: ByRef fills unallocated arrays."""
+    from gpl_helpers import output_of
+
+    port = modbus_slave.server_address[1]
+    out = output_of(f"""
+Module Mb
+    Public Sub Main()
+        Modbus_Write_Example()
+        Modbus_Read_Example()
+    End Sub
+
+    Public Sub Modbus_Read_Example
+        Dim ep As New IPEndPoint("192.168.0.150", {port})
+        Dim mb As New Modbus(ep)
+        Dim ii As Integer
+        Dim bool() As Boolean
+        mb.ReadCoils(1, 16, bool)
+        For ii = 1 To 16
+            Console.Write("Coil " & CStr(ii) & ": ")
+            Console.Writeline(bool(ii-1))
+        Next ii
+        mb.ReadDiscreteInputs(1, 16, bool)
+        For ii = 1 To 16
+            Console.Write("Input " & CStr(ii) & ": ")
+            Console.Writeline(bool(ii-1))
+        Next ii
+        mb.Close
+    End Sub
+
+    Public Sub Modbus_Write_Example
+        Dim ep As New IPEndPoint("192.168.0.150", {port})
+        Dim mb As New Modbus (ep)
+        Dim ii As Integer
+        Dim output() As Integer
+        Dim bool() As Boolean
+        For ii = 1 To 16
+            mb.WriteSingleCoil(ii, ii And 1)
+        Next ii
+        mb.WriteSingleRegister(1, 600)
+        ReDim bool(15)
+        For ii = 0 To 15
+            bool(ii) = ii And 2
+        Next ii
+        mb.WriteMultipleCoils(1, bool)
+        ReDim output (15)
+        For ii = 0 To 15
+            output(ii) = ii*ii
+        Next ii
+        mb.WriteMultipleRegisters(1, output)
+        mb.Close
+    End Sub
+End Module
+""")
+    lines = out.splitlines()
+    assert lines[:16] == [f"Coil {n}: {bool((n - 1) & 2)}" for n in range(1, 17)]
+    assert lines[16:] == [f"Input {n}: {n % 2 == 1}" for n in range(1, 17)]
+    assert modbus_slave.holding[:16] == [ii * ii for ii in range(16)]

@@ -190,7 +190,7 @@ def _go(rt, flange: Location, profile: GplProfile, righty: bool | None, dest_q: 
         yield lambda: not robot.moving
     source = robot.destination()
     robot.set_speed(profile.Speed)  # this motion only
-    if righty is not None:
+    if righty is not None and not profile.Straight:  # a straight line keeps the configuration
         robot.request_configuration(righty)
     try:
         yield from robot.move(flange, straight=profile.Straight, accel=profile.accel_fraction())
