@@ -419,6 +419,38 @@ def test_tool_offset_applies_to_where_and_moves(rt):
     assert got["where"].Z == pytest.approx(150, abs=0.05)
 
 
+def test_here_on_a_framed_location_stores_the_pose_relative_to_the_frame(rt):
+    """Location.Here sets the total position to the robot's (L1897): on a location with a
+    frame, PosWrtRef becomes frame^-1 * Where, so Pos equals Robot.Where."""
+    got = {}
+
+    def body(rt):
+        ready(rt)
+        fine = Profile(rt)
+        fine.InRange = 1
+        yield from Move.Loc(rt, xyz(rt, 320, 40, 200, 0, 180, 90), fine)
+        yield from Move.WaitForEOM(rt)
+        frame = RefFrame(rt)
+        frame.Loc.XYZ(100, 50, 0, 0, 0, 30)
+        loc = Location(rt)
+        loc.RefFrame = frame
+        loc.Here()
+        got["loc"], got["where"] = loc, Robot.Where(rt)
+        got["speed"] = Robot.SpeedAngles(rt).joint_values()
+
+    rt.run(body)
+    loc, where = got["loc"], got["where"]
+    assert Location.Distance(rt, loc.Pos, where) < 1e-9
+    expected = frame_inverse_times(rt, loc.RefFrame, where)
+    assert_pose(loc.PosWrtRef, expected, tol=1e-6)
+    assert np.allclose(got["speed"], 0, atol=1.0)  # settled: joint speeds near zero
+
+
+def frame_inverse_times(rt, frame, where):
+    p = frame.Pos().Inverse().Mul(where)
+    return [p.X, p.Y, p.Z, p.Yaw, p.Pitch, p.Roll]
+
+
 def test_profile_values_are_checked_and_cloned(rt):
     p = Profile(rt)
     assert (p.Speed, p.Accel, p.Decel, p.InRange, p.Straight) == (100, 100, 100, 0, False)
