@@ -521,3 +521,71 @@ def test_project_folder_with_gpo_globals(tmp_path):
     while scheduler.alive:
         scheduler.run_cycle()
     assert thread.error is None and system.console.output == "200 50\n"
+
+
+def test_exits_cross_select_and_finally():
+    """Ch. 9 and 11: Exit Do from inside a Select, Continue/Exit For, Return
+    inside a Try runs its Finally, a field as the For variable (L1378), a Dim
+    of an unsized array initialised from Split, recursion."""
+    out = output_of("""
+Class Acc
+    Public n As Double
+End Class
+Function Fact(ByVal n As Integer) As Double
+    If n <= 1 Then Return 1
+    Return n * Fact(n - 1)
+End Function
+Function Early() As Integer
+    Dim i As Integer
+    Try
+        For i = 1 To 10
+            If i = 3 Then Return i * 100
+        Next
+    Finally
+        Console.WriteLine("cleanup")
+    End Try
+    Return -1
+End Function
+Sub Main()
+    Dim a As New Acc
+    Dim state, i As Integer
+    Dim words() As String = "a,b,,c".Split(",")
+    Do
+        Select Case state
+            Case 0, 1
+                state += 1
+            Case Else
+                Exit Do
+        End Select
+    Loop
+    For a.n = 0.5 To 2 Step 0.5
+        Console.Write(a.n & " ")
+    Next
+    For i = 1 To 5
+        If i = 2 Then Continue For
+        If i = 4 Then Exit For
+        Console.Write(i)
+    Next
+    Console.WriteLine(" i=" & i & " state=" & state & " words=" & words.Length)
+    Console.WriteLine(Fact(10) & " " & Early())
+End Sub
+""")
+    assert lines(out) == ["0.5 1 1.5 2 13 i=4 state=2 words=4", "cleanup", "3628800 300"]
+
+
+def test_comments_regions_and_continuations():
+    """Ch. 3 (L577-589): labels, ' comments, # lines ignored, ` _` continuation
+    and (twin) implicit continuation after an operator or comma."""
+    out = output_of("""
+#Region "demo"
+Sub Main() ' the start
+    Dim s As String
+    s = "a" & _
+        "b" &
+        "c"
+    Console.WriteLine(s _
+    )
+#End Region
+End Sub
+""")
+    assert out == "abc\n"

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import pytest
 
-from gpl_helpers import output_of, run_gpl
+from gpl_helpers import output_of
 from twin.errors import ProgramError
 
 

@@ -529,7 +529,7 @@ class ProcCompiler(Scope):
                 raise self.fail(UNSUPPORTED, "array initialisers (ch. 4, Data Type Arrays)", d)
             dims = ", ".join(self.index_code(b) if b is not None else "0" for b in d.bounds)
             return f"GplArray(({dims},), {self.default(t.element)!r})"
-        if d.bounds is not None:
+        if d.bounds is not None and d.init is None:
             return "None"
         if d.new:
             if d.init is not None:
@@ -760,9 +760,9 @@ class ProcCompiler(Scope):
         self.slice_check(depth)
 
     def with_exit_catch(self, s, depth: int, emit_body) -> None:
-        """A loop whose body has labels is left with `_Break` (a `break` would only
-        leave the dispatch loop)."""
-        if not _contains(s.body, (ast.Label,)):
+        """A loop whose body has labels or a Select is left with `_Break` (a `break`
+        would only leave the dispatch loop or the Select's loop)."""
+        if not _contains(s.body, (ast.Label, ast.Select)):
             emit_body(depth)
             return
         self.emit(depth, "try:")
@@ -803,9 +803,13 @@ class ProcCompiler(Scope):
         subject, st = self.expr(s.subject)
         value = self.fresh("case")
         self.emit(depth, f"{value} = {subject}")
-        exits = _contains([c for _, b in s.cases for c in b] + (s.default or []), (ast.Exit,))
+        bodies = [c for _, b in s.cases for c in b] + (s.default or [])
+        exits = _contains(bodies, (ast.Exit,))
         inner = depth
         if exits:
+            if _contains(bodies, (ast.Label, ast.Select)):
+                self.emit(depth, "try:")
+                depth += 1
             self.emit(depth, "while True:")
             inner = depth + 1
             self.loops.append(_Loop("select", id(s)))
@@ -822,6 +826,9 @@ class ProcCompiler(Scope):
         if exits:
             self.emit(inner, "break")
             self.loops.pop()
+            if _contains(bodies, (ast.Label, ast.Select)):
+                self.emit(depth - 1, "except _Break as _b:")
+                self.emit(depth, f"if _b.loop != {id(s)}: raise")
 
     def case_test(self, value: str, st: SType | None, t: ast.CaseTest) -> str:
         """Case values are converted to the type of the Select value (ch. 9)."""
@@ -952,7 +959,7 @@ class ProcCompiler(Scope):
         for i in range(len(self.loops) - 1, -1, -1):
             loop = self.loops[i]
             if loop.kind == kind:
-                direct = all(l.kind != "dispatch" for l in self.loops[i + 1:])
+                direct = all(l.kind not in ("dispatch", "select") for l in self.loops[i + 1:])
                 self.emit(depth, "break" if direct else f"raise _Break({loop.ident})")
                 return
         raise self.fail(INVALID_STATEMENT, f"Exit {kind.capitalize()} outside a {kind.capitalize()} block", s)

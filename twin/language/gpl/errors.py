@@ -42,6 +42,7 @@ STRING_TOO_LONG = -707
 INVALID_NUMBER = -708
 ME_UNDEFINED = -709
 UNDEFINED_PROCEDURE = -710
+STACK_OVERFLOW = -712
 INVALID_EXCEPTION = -807  # GPL Dictionary, Throw of an ErrorCode 0
 PROJECT_ERROR = -786  # "Project generated error", reserved for applications
 
@@ -68,6 +69,7 @@ MESSAGES = {
     INVALID_NUMBER: "Invalid numeric value",
     ME_UNDEFINED: "Me is not defined in this procedure",
     UNDEFINED_PROCEDURE: "Undefined procedure",
+    STACK_OVERFLOW: "Stack overflow: too many nested procedure calls",
     INVALID_EXCEPTION: "Invalid exception",
     PROJECT_ERROR: "Project generated error",
 }

@@ -240,7 +240,7 @@ class _ToAst(Transformer):
         return ast.If(branches=branches, orelse=orelse, **_pos(meta))
 
     def for_block(self, meta, c):
-        var, start, stop, step, body, _next = c[0], c[2], c[3], c[4], c[5], c[6]
+        var, start, stop, step, body = c[0], c[2], c[3], c[4], c[5]
         return ast.For(var=var, start=start, stop=stop, step=step, body=_body(body), **_pos(meta))
 
     def while_block(self, meta, c):

@@ -24,14 +24,11 @@ from . import builtins, values
 from .compiler import CompiledProject, ProjectCompiler
 from .errors import (
     DIVIDE_BY_ZERO, INVALID_ARGUMENT, INVALID_STATEMENT, ME_UNDEFINED, NO_START_PROCEDURE, NULL_OBJECT,
-    OVERFLOW, TYPE_MISMATCH, UNDEFINED_PROCEDURE, UNDEFINED_SYMBOL, GplError, fail, message,
+    OVERFLOW, STACK_OVERFLOW, TYPE_MISMATCH, UNDEFINED_PROCEDURE, UNDEFINED_SYMBOL, GplError, fail, message,
 )
 from .library import CLASSES, Ref, member as library_member
 from .parser import parse, parse_file
 from .project import read_project
-
-MAX_CALL_DEPTH = 400
-
 
 class GplObject:
     """Base of the Python classes made for user-defined GPL classes."""
@@ -235,7 +232,7 @@ def as_gpl_error(err: BaseException) -> GplError | None:
     if isinstance(err, OverflowError):
         return fail(OVERFLOW)
     if isinstance(err, RecursionError):
-        return GplError(-712, "Stack overflow: too many nested procedure calls")
+        return fail(STACK_OVERFLOW)
     if not _raised_in_program(err):
         return None  # not the program's fault: a bug in twin, let it show
     if isinstance(err, (AttributeError, TypeError)) and "NoneType" in str(err):
