@@ -589,3 +589,43 @@ Sub Main() ' the start
 End Sub
 """)
     assert out == "abc\n"
+
+
+def test_thread_abort_and_readonly_property():
+    """Ch. 18 Table 18-1: Abort stops another thread (ThreadState 0 after) and a
+    thread may abort itself; VB's `ReadOnly Property` modifier is accepted."""
+    out = output_of("""
+Class C
+    Private v As Integer = 7
+    Public ReadOnly Property Value As Integer
+        Get
+            Return v
+        End Get
+    End Property
+End Class
+Module M
+    Public count As Integer
+    Public Sub Spin()
+        While True
+            count += 1
+            Thread.Sleep(10)
+        End While
+    End Sub
+    Public Sub SelfStop()
+        Console.WriteLine("stopping myself")
+        Thread.CurrentThread.Abort
+        Console.WriteLine("never")
+    End Sub
+    Public Sub Main()
+        Dim c As New C
+        Dim t As New Thread("Spin")
+        Dim t2 As New Thread("SelfStop")
+        t.Start
+        t2.Start
+        Thread.Sleep(100)
+        t.Abort
+        Console.WriteLine(c.Value & " " & (count > 3) & " " & t.ThreadState & " " & t2.ThreadState)
+    End Sub
+End Module
+""")
+    assert lines(out) == ["stopping myself", "7 True 0 0"]

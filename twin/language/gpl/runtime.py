@@ -57,6 +57,10 @@ class _ExitTry(_Control):
     pass
 
 
+class _Abort(_Control):
+    """Thread.Abort of the running thread itself."""
+
+
 class _Slice:
     def __repr__(self) -> str:
         return "SLICE"
@@ -426,6 +430,7 @@ class GplThread:
         self.error: ProgramError | None = None
         self.finished = False
         self.suspended = False
+        self.running = False
         self.generator = self._run(steps)
 
     # ---- the GplRuntime protocol
@@ -444,6 +449,8 @@ class GplThread:
 
     def abort(self) -> None:
         self.finished = True
+        if self.running:
+            raise _Abort()
         self.generator.close()
 
     def suspend(self) -> None:
@@ -461,14 +468,17 @@ class GplThread:
             for step in steps:
                 gen = step(self)
                 while True:
+                    self.running = True
                     try:
                         wait = next(gen)
                     except StopIteration:
                         break
+                    finally:
+                        self.running = False
                     yield wait
                     while self.suspended:
                         yield lambda: not self.suspended
-        except _Control:
+        except _Abort:
             pass
         except Exception as err:  # noqa: BLE001 - sorted out just below
             gpl = as_gpl_error(err)
