@@ -27,7 +27,7 @@ import numpy as np
 from ....controller.location import NULL, Location, trans
 from . import codes
 from . import gpl_class, shared
-from .state import from_gpl_angles, to_gpl_angles, tool_pose
+from .state import from_gpl_angles, solve_joints, to_gpl_angles, tool_pose
 
 CARTESIAN, ANGLES = 0, 1
 MAX_AXES = 12
@@ -262,9 +262,7 @@ class GplLocation:
         rt = self._rt
         if self._type == ANGLES:
             return GplLocation.cartesian(rt, tool_pose(rt, from_gpl_angles(rt, self.joint_values())))
-        from .motion import solve_joints
-
-        return GplLocation.angles(rt, to_gpl_angles(rt, solve_joints(rt, self)))
+        return GplLocation.angles(rt, to_gpl_angles(rt, solve_joints(rt, self.total(), self._config)))
 
     def Mul(self, other: "GplLocation") -> "GplLocation":
         """total(self) composed with total(other): other expressed in self's frame (L1875)."""

@@ -31,10 +31,7 @@ from ....errors import ProgramError
 from . import codes
 from . import gpl_class, shared
 from .locations import ANGLES, GplLocation, location_arg
-from .state import MM, flange_pose, flange_target, from_gpl_angles, robot_state
-
-GPL_RIGHTY, GPL_LEFTY = 0x01, 0x02  # Location.Config bits (manual Table 4-4, L658)
-
+from .state import flange_pose, flange_target, from_gpl_angles, matrix_m, righty_of, robot_state
 
 def _percent(name: str):
     def get(self) -> float:
@@ -137,37 +134,12 @@ def check_ready(rt) -> None:
         raise codes.fail(codes.NO_ROBOT_ATTACHED)
 
 
-def _matrix_m(pose: Location) -> np.ndarray:
-    T = pose.matrix()
-    T[:3, 3] /= MM
-    return T
-
-
-def _righty(config: int) -> bool | None:
-    if config & GPL_RIGHTY:
-        return True
-    if config & GPL_LEFTY:
-        return False
-    return None
-
-
-def solve_joints(rt, loc: GplLocation) -> np.ndarray:
-    """Joint vector (rad, m) for a Cartesian location's total position."""
-    from ....controller.kinematics import KinematicsError
-
-    robot = rt.robot
-    try:
-        return robot.kin.ik(_matrix_m(flange_target(rt, loc.total())), robot.q_command, righty=_righty(loc.Config))
-    except KinematicsError as err:
-        raise codes.from_controller(ProgramError(err.message, err.code)) from None
-
-
 def destination_joints(rt) -> np.ndarray:
     """Joints at the destination of the last motion."""
     state = robot_state(rt)
     if state.dest_q is None:
         robot = rt.robot
-        state.dest_q = robot.kin.ik(_matrix_m(robot.destination()), robot.q_command)
+        state.dest_q = robot.kin.ik(matrix_m(robot.destination()), robot.q_command)
     return state.dest_q
 
 
@@ -215,7 +187,7 @@ def _go_location(rt, loc: GplLocation, profile):
     if loc.Type == ANGLES:
         yield from _go_joints(rt, from_gpl_angles(rt, loc.joint_values()), profile)
     else:
-        yield from _go(rt, flange_target(rt, loc.total()), profile, _righty(loc.Config))
+        yield from _go(rt, flange_target(rt, loc.total()), profile, righty_of(loc.Config))
 
 
 @gpl_class("Move")
@@ -231,7 +203,7 @@ class Move:
     def Approach(rt, loc, profile):
         """Move to the clearance position of a Cartesian `loc` (ZClearance, ZWorld)."""
         loc = location_arg(loc)
-        yield from _go(rt, flange_target(rt, loc.clearance()), profile, _righty(loc.Config))
+        yield from _go(rt, flange_target(rt, loc.clearance()), profile, righty_of(loc.Config))
 
     @shared
     def Rel(rt, loc, profile):

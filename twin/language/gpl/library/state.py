@@ -21,10 +21,13 @@ from typing import Any
 
 import numpy as np
 
+from ....controller.kinematics import KinematicsError
 from ....controller.location import NULL, Location
+from ....errors import ProgramError
 from . import codes
 
 MM = 1000.0
+GPL_RIGHTY, GPL_LEFTY = 0x01, 0x02  # Location.Config bits (manual Table 4-4, L658)
 
 
 @dataclass
@@ -39,7 +42,6 @@ class RobotState:
     last_profile: Any = None
     last_in_range: float = 0.0
     source: Location | None = None
-    source_q: np.ndarray | None = None
     dest_q: np.ndarray | None = None
     messages: list[str] = field(default_factory=list)  # Controller.SystemMessage log
     analog: dict[int, float] = field(default_factory=dict)  # Signal.AIO channels
@@ -99,3 +101,28 @@ def flange_target(rt, total: Location) -> Location:
     """The flange pose (robot base frame) that puts the tool tip at `total`."""
     state = robot_state(rt)
     return state.base.inverse() * total * state.tool.inverse()
+
+
+def matrix_m(pose: Location) -> np.ndarray:
+    """4x4 matrix of a pose, translation in metres (what the kinematics takes)."""
+    T = pose.matrix()
+    T[:3, 3] /= MM
+    return T
+
+
+def righty_of(config: int) -> bool | None:
+    """The arm configuration a Location's Config bits ask for (None: keep the present one)."""
+    if config & GPL_RIGHTY:
+        return True
+    if config & GPL_LEFTY:
+        return False
+    return None
+
+
+def solve_joints(rt, total: Location, config: int) -> np.ndarray:
+    """Joint vector (rad, m) putting the tool tip at `total`, from the present joints."""
+    robot = rt.robot
+    try:
+        return robot.kin.ik(matrix_m(flange_target(rt, total)), robot.q_command, righty=righty_of(config))
+    except KinematicsError as err:
+        raise codes.from_controller(ProgramError(err.message, err.code)) from None
