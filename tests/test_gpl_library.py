@@ -451,6 +451,34 @@ def frame_inverse_times(rt, frame, where):
     return [p.X, p.Y, p.Z, p.Yaw, p.Pitch, p.Roll]
 
 
+def test_delay_queues_a_pause_and_softestop_stops_the_robot(rt):
+    """Move.Delay pauses the motion queue, not the thread (Table 12-5): the call returns
+    at once and WaitForEOM waits it out.  A soft E-stop stops the motion and turns power
+    off, so the next motion raises -1600."""
+    got = {}
+
+    def body(rt):
+        ready(rt)
+        t0 = Controller.Timer(rt)
+        yield from Move.Delay(rt, 0.5)
+        got["returned"] = Controller.Timer(rt) - t0
+        yield from Move.WaitForEOM(rt)
+        got["ended"] = Controller.Timer(rt) - t0
+        yield from Move.Loc(rt, xyz(rt, 350, 150, 250, 0, 180, 180), Profile(rt))
+        yield from Controller.SleepTick(rt, 20)
+        Controller.set_SoftEStop(rt, True)
+        got["moving"] = rt.robot.moving
+        try:
+            yield from Move.Loc(rt, xyz(rt, 300, 0, 300, 0, 180, 180), Profile(rt))
+        except GplError as err:
+            got["code"] = err.code
+
+    rt.run(body)
+    assert got["returned"] == 0.0
+    assert 0.5 <= got["ended"] < 0.5 + 0.017
+    assert got["moving"] is False and got["code"] == -1600
+
+
 def test_profile_values_are_checked_and_cloned(rt):
     p = Profile(rt)
     assert (p.Speed, p.Accel, p.Decel, p.InRange, p.Straight) == (100, 100, 100, 0, False)
