@@ -629,3 +629,25 @@ Module M
 End Module
 """)
     assert lines(out) == ["stopping myself", "7 True 0 0"]
+
+
+def test_twin_run_project_folder(tmp_path, capsys):
+    """`twin run PROJECT_DIR` runs a GPL project on the cell; Console output goes
+    to stdout and the report; an uncaught error is printed with file, line,
+    column, GPL code and procedure, and the exit status is 1."""
+    import json
+
+    from twin.cli import main
+
+    (tmp_path / "Project.gpr").write_text('ProjectBegin\nProjectStart="Main"\nProjectEnd\n')
+    (tmp_path / "Main.gpl").write_text(
+        "Module Cell\n    Public Sub Main()\n        Dim x As Integer\n        Console.WriteLine(\"hello\")\n"
+        "        x = 1 / 0\n    End Sub\nEnd Module\n"
+    )
+    report = tmp_path / "out" / "report.json"
+    code = main(["run", str(tmp_path), "--report", str(report), "--max-sim-time", "2"])
+    captured = capsys.readouterr()
+    assert code == 1 and captured.out == "hello\n"
+    assert f"{tmp_path / 'Main.gpl'}:5:9: Divide by zero (-702) in Cell.Main" in captured.err
+    data = json.loads(report.read_text())
+    assert data["output"] == "hello\n" and data["errors"][0]["code"] == -702
