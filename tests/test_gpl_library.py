@@ -1195,3 +1195,92 @@ End Module
     assert lines[:16] == [f"Coil {n}: {bool((n - 1) & 2)}" for n in range(1, 17)]
     assert lines[16:] == [f"Input {n}: {n % 2 == 1}" for n in range(1, 17)]
     assert modbus_slave.holding[:16] == [ii * ii for ii in range(16)]
+
+
+def _tftp_server(port_box: list, content: bytes, done: threading.Event) -> None:
+    """A one-transfer TFTP server (RFC 1350 read request) on loopback: answers from a new
+    port (the transfer ID), 512-byte blocks, waits for each ACK."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as listen:
+        listen.bind(("127.0.0.1", 0))
+        listen.settimeout(20)
+        port_box.append(listen.getsockname()[1])
+        done.set()
+        request, client = listen.recvfrom(1500)
+        assert request[:2] == b"\x00\x01" and request[2:].split(b"\x00")[:2] == [b"testfile.txt", b"octet"]
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as transfer:
+            transfer.bind(("127.0.0.1", 0))
+            transfer.settimeout(20)
+            for block in range(1, len(content) // 512 + 2):
+                data = content[(block - 1) * 512: block * 512]
+                transfer.sendto(struct.pack(">HH", 3, block) + data, client)
+                ack, _ = transfer.recvfrom(1500)
+                assert ack == struct.pack(">HH", 4, block)
+
+
+def test_tftp_client_example_as_gpl_source():
+    """TftpClient (L2432-2485, E33) as GPL source against a TFTP server on loopback:
+    repaired as digest §14 says (`srv_ep`, `rem_ep`, the split Substring, the server's port
+    instead of 69, the lost End While).  Chr(0) strings, ByRef endpoint of ReceiveFrom."""
+    from gpl_helpers import output_of
+
+    content = bytes((ord("a") + i % 26) for i in range(700))
+    port_box: list = []
+    ready_event = threading.Event()
+    server = threading.Thread(target=_tftp_server, args=(port_box, content, ready_event), daemon=True)
+    server.start()
+    ready_event.wait(5)
+    out = output_of(f"""
+Module Tftp
+    Public Sub TftpClient
+        ' Access a TFTP server using UDP, open a file,
+        ' and display it on the console.
+        Dim file As String = "testfile.txt"
+        Dim srv_ep As New IPEndPoint("192.168.0.2", {port_box[0]})
+        Dim rem_ep, ep As IPEndPoint
+        Dim out, inp As String
+        Dim uc As New UdpClient()
+        Dim us As Socket
+        Dim count, op, block As Integer
+        us = uc.Client
+        ' Build "open for read" command
+        out = Chr(0) & Chr(1) & file & Chr(0) & "octet" & Chr(0)
+        us.SendTo(out, 0, srv_ep)
+        count = us.ReceiveFrom(inp, 1500, rem_ep)
+        Console.Writeline("Remote ip: " & rem_ep.IPAddress & _
+                          ", port: " & CStr(rem_ep.Port))
+        op = Asc(inp.Substring(0,1))*256 + Asc(inp.Substring(1,1))
+        block = Asc(inp.Substring(2,1))*256 + Asc(inp.Substring(3,1))
+        Console.Writeline("Block: " & CStr(Block))
+        If (count>4) Then
+            Console.Writeline(inp.Substring(4))
+        End If
+        While True
+            out = Chr(0) & Chr(4) & Chr(block/256) & Chr(block)
+            us.SendTo(out, 0, rem_ep)
+            If (count<512) Then
+                ' End if less than 512 bytes
+                Exit While
+            End If
+            count = us.ReceiveFrom(inp, 1500, ep)
+            If (ep.IPAddress<>rem_ep.IPAddress) Or _
+                (ep.Port<>rem_ep.Port) Then
+                Console.Writeline("Address mismatch")
+                Exit While
+            End If
+            block = Asc(inp.Substring(2,1))*256 + _
+                    Asc(inp.Substring(3,1))
+            Console.Writeline("Block: " & CStr(Block))
+            If (count>4) Then
+                Console.Writeline(inp.Substring(4))
+            End If
+        End While
+        Console.Writeline("Transfer complete")
+        us.Close
+    End Sub
+End Module
+""", start="TftpClient")
+    server.join(5)
+    lines = out.splitlines()
+    assert lines[0].startswith("Remote ip: 127.0.0.1, port: ")
+    assert lines[1:] == ["Block: 1", content[:512].decode(), "Block: 2", content[512:].decode(),
+                         "Transfer complete"]
