@@ -1284,3 +1284,41 @@ End Module
     assert lines[0].startswith("Remote ip: 127.0.0.1, port: ")
     assert lines[1:] == ["Block: 1", content[:512].decode(), "Block: 2", content[512:].decode(),
                          "Transfer complete"]
+
+
+def test_nvram_examples_as_gpl_source():
+    """E40 (L2983-2990) stops with -323 Device full at ii = 6 on the WriteLine line; E41
+    (L2998-3006, `tfile.Clos` read as Close) runs to the end; reading both files back
+    gives the manual's records."""
+    from gpl_helpers import error_of, output_of
+
+    error = error_of("""
+Module Nv
+    Public Sub Main()
+        Dim tfile As New StreamWriter("/NVRAM/file2 -size 64", True)
+        Dim ii As Integer
+        For ii = 1 To 100
+            tfile.WriteLine("Record " & CStr(ii))
+        Next ii
+        tfile.Close
+    End Sub
+End Module
+""")
+    assert (error.code, error.line) == (-323, 7)
+    out = output_of("""
+Module Nv
+    Public Sub Main()
+        Dim tfile As New StreamWriter("/NVRAM/file3 -size 64 -wrap", True)
+        Dim ii As Integer
+        For ii = 1 To 100
+            tfile.WriteLine("Record " & CStr(ii))
+        Next ii
+        tfile.Close
+        Dim rfile As New StreamReader("/NVRAM/file3")
+        While rfile.Peek() >= 0
+            Console.WriteLine(rfile.ReadLine())
+        End While
+    End Sub
+End Module
+""")
+    assert out.splitlines() == [f"Record {i}" for i in range(96, 101)]
