@@ -409,8 +409,9 @@ End Sub
 
 
 def test_threads_share_module_variables_and_lock_with_test_and_set():
-    """Ch. 18 (L3351-3367): threads started with New Thread / Start / Join; an
-    increment guarded by a Thread.TestAndSet lock is exact."""
+    """Ch. 18 (L3351-3367): threads started with New Thread (a procedure name, or
+    AddressOf as in VB.NET) / Start / Join; an increment guarded by a
+    Thread.TestAndSet lock is exact."""
     out = output_of("""
 Module M
     Public my_lock As Integer
@@ -428,7 +429,7 @@ Module M
     End Sub
     Public Sub Main()
         Dim t1 As New Thread("Worker")
-        Dim t2 As New Thread("M.Worker")
+        Dim t2 As New Thread(AddressOf Worker)
         t1.Start
         t2.Start
         t1.Join(-1)

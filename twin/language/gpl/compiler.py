@@ -1214,8 +1214,10 @@ class ProcCompiler(Scope):
     def e_Call(self, e: ast.Call):
         return self.call(e)
 
-    def e_AddressOf(self, e):
-        raise self.fail(INVALID_STATEMENT, "AddressOf is only allowed in the New of a Delegate", e)
+    def e_AddressOf(self, e: ast.AddressOf):
+        """AddressOf outside a Delegate's New (`New Thread(AddressOf Worker)`, as in
+        VB.NET): a delegate of the procedure's own signature."""
+        return self.address_of(e, None), None
 
     def e_New(self, e: ast.New):
         scope_type = self.resolve_type(e.type, e)
@@ -1247,30 +1249,38 @@ class ProcCompiler(Scope):
             raise self.fail(WRONG_ARGUMENT_COUNT, f"New {dsym.name} takes one procedure", e)
         arg = args[0]
         if isinstance(arg, ast.AddressOf):
-            target = arg.target
-            if isinstance(target, ast.Member):
-                ocode, ot = self.expr_or_ns(target.obj)
-                if ot is not None and ot.base == "ns":
-                    proc = self.member_of_namespace(ot.ref, target.key, target)
-                    me = "None"
-                elif ot is not None and ot.base == "user":
-                    proc = self.class_member(ot.ref, target.key, target)
-                    me = ocode
-                else:
-                    raise self.fail(TYPE_MISMATCH, "AddressOf needs a procedure", e)
-            elif isinstance(target, ast.Name):
-                proc = self.lookup_value(target.key, target)
-                me = "me" if isinstance(proc, ProcSym) and proc.instance and self.me_available else "None"
-            else:
-                raise self.fail(TYPE_MISMATCH, "AddressOf needs a procedure", e)
-            if not isinstance(proc, ProcSym):
-                raise self.fail(TYPE_MISMATCH, "AddressOf needs a Sub or Function", e)
-            self.check_delegate_signature(dsym, proc, e)
-            if proc.instance and me == "None":
-                raise self.fail(INVALID_STATEMENT, f"AddressOf {proc.name} needs an object", e)
-            return f"_Delegate({proc.py}, {me if proc.instance else 'None'}, {proc.qualified!r}, {len(proc.byref_positions) > 0})"
+            return self.address_of(arg, dsym)
         code, _ = self.expr(arg)
         return f"_delegate_named(rt, {code}, {dsym.kind!r}, {len(dsym.params)})"
+
+    def address_of(self, e: ast.AddressOf, dsym: DelegateSym | None) -> str:
+        """A Delegate object for AddressOf proc / AddressOf object.method (ch. 10):
+        the object is bound when the delegate is made."""
+        target = e.target
+        me = "None"
+        if isinstance(target, ast.Member):
+            ocode, ot = self.expr_or_ns(target.obj)
+            if ot is not None and ot.base == "ns":
+                proc = self.member_of_namespace(ot.ref, target.key, target)
+            elif ot is not None and ot.base == "user":
+                proc = self.class_member(ot.ref, target.key, target)
+                me = ocode
+            else:
+                raise self.fail(TYPE_MISMATCH, "AddressOf needs a procedure", e)
+        elif isinstance(target, ast.Name):
+            proc = self.lookup_value(target.key, target)
+            if isinstance(proc, ProcSym) and proc.instance and self.me_available:
+                me = "me"
+        else:
+            raise self.fail(TYPE_MISMATCH, "AddressOf needs a procedure", e)
+        if not isinstance(proc, ProcSym):
+            raise self.fail(TYPE_MISMATCH, "AddressOf needs a Sub or Function", e)
+        if dsym is not None:
+            self.check_delegate_signature(dsym, proc, e)
+        if proc.instance and me == "None":
+            raise self.fail(INVALID_STATEMENT, f"AddressOf {proc.name} needs an object", e)
+        return f"_Delegate({proc.py}, {me if proc.instance else 'None'}, {proc.qualified!r}, " \
+               f"{bool(proc.byref_positions)})"
 
     def check_delegate_signature(self, dsym: DelegateSym, proc: ProcSym, node) -> None:
         """The procedure must match the Delegate statement exactly (ch. 10)."""
