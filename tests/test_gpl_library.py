@@ -1322,3 +1322,37 @@ Module Nv
 End Module
 """)
     assert out.splitlines() == [f"Record {i}" for i in range(96, 101)]
+
+
+def test_xml_write_file_example_as_gpl_source(tmp_path):
+    """XmlWriteFile (L3530-3548, E47; continuation after `&` restored): a good path writes
+    the file; a path into a missing folder prints "Output error <code>, <message>" from
+    the document and rethrows, stopping the thread with that code."""
+    from gpl_helpers import run_gpl
+
+    system, thread = run_gpl("""
+Module X
+    Public Sub Main()
+        Dim doc As New XmlDoc("root")
+        XmlWriteFile("/flash/good.xml", doc)
+        XmlWriteFile("/flash/missing/bad.xml", doc)
+    End Sub
+
+    Public Sub XmlWriteFile(ByVal file As String, ByVal doc As XmlDoc)
+        Dim exc As Exception
+        Try
+            doc.SaveFile(file)
+        Catch exc
+            If doc.ErrorCode <> 0 Then
+                Console.Writeline("Output error " & _
+                                  CStr(doc.ErrorCode) & _
+                                  ", " & doc.Message)
+            End If
+            Throw exc
+        End Try
+    End Sub
+End Module
+""", sandbox=tmp_path)
+    assert (tmp_path / "flash" / "good.xml").read_text().endswith("<root/>")
+    assert system.console.output == "Output error -799, XML error: cannot write /flash/missing/bad.xml: no such folder\n"
+    assert thread.error.code == -799

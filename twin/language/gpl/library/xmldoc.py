@@ -24,6 +24,7 @@ import html
 from xml.dom import Node, minidom
 from xml.parsers.expat import ExpatError
 
+from ..errors import GplError
 from . import codes
 from . import byref, gpl_class, shared
 from .files import _read_bytes, sandbox_path
@@ -126,10 +127,16 @@ class XmlDoc:
         target.value = self.text()
 
     def SaveFile(self, path, options=0) -> None:
-        real = sandbox_path(self._rt, str(path))
-        if not real.parent.is_dir():
-            raise codes.fail(codes.XML_ERROR, f"cannot write {path}")
+        """Write the document; a failure is also kept in ErrorCode / Message (E47, L3530-3548)."""
+        try:
+            real = sandbox_path(self._rt, str(path))
+            if not real.parent.is_dir():
+                raise codes.fail(codes.XML_ERROR, f"cannot write {path}: no such folder")
+        except GplError as err:
+            self._error_code, self._message = err.code, err.message
+            raise
         real.write_text(self.text(), encoding="latin-1")
+        self._error_code, self._message = 0, ""
 
 
 @gpl_class("XmlNode")
