@@ -1356,3 +1356,24 @@ End Module
     assert (tmp_path / "flash" / "good.xml").read_text().endswith("<root/>")
     assert system.console.output == "Output error -799, XML error: cannot write /flash/missing/bad.xml: no such folder\n"
     assert thread.error.code == -799
+
+
+def test_stream_reader_bytes_and_line_ends(rt):
+    """StreamReader.Read returns bytes one by one and -1 at the end; ReadLine accepts LF,
+    CR and CR LF (Table 15-3); StreamWriter.NewLine changes WriteLine's terminator."""
+    out = StreamWriter(rt, "/flash/mixed.txt")
+    out.NewLine = "\n"
+    out.WriteLine("a")
+    out.Write("b\rc\r\n")
+    out.Write("d")
+    out.Close()
+    reader = StreamReader(rt, "/flash/mixed.txt")
+    assert [reader.ReadLine() for _ in range(4)] == ["a", "b", "c", "d"]
+    assert reader.Read() == -1
+    reader = StreamReader(rt, "/flash/mixed.txt")
+    assert [reader.Read() for _ in range(3)] == [ord("a"), 10, ord("b")]
+    assert reader.Peek() == 13
+    out = StreamWriter(rt, "/flash/mixed.txt", True)
+    out.Write("e")
+    out.Close()
+    assert (rt.sandbox / "flash" / "mixed.txt").read_bytes() == b"a\nb\rc\r\nde"
