@@ -23,7 +23,7 @@ Each generated line maps back to its GPL statement, for errors.
 from __future__ import annotations
 
 import inspect
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from ...errors import ProgramError
 from . import ast
@@ -72,7 +72,6 @@ class CompiledProject:
     classes: list[ClassSym]
     init_units: list[str]  # module initialisers (py names), in load order
     init_subs: list[str]  # user Init subs, in load order
-    waiting_names: set[str]
     public_procs: dict[str, ProcSym]  # "proc", "module.proc", "class.proc" -> symbol
     statics: dict[str, object]  # global name -> initial value
 
@@ -169,8 +168,7 @@ class ProjectCompiler:
             for prop in cls.properties.values():
                 self.compile_property(prop)
         return CompiledProject(
-            self.units, self.module_order, self.classes, init_units, init_subs, self.waiting,
-            self.public_procs, self.statics,
+            self.units, self.module_order, self.classes, init_units, init_subs, self.public_procs, self.statics,
         )
 
     def declare_members(self, module: ModuleSym, cls: ClassSym | None, members: list) -> None:
@@ -259,7 +257,7 @@ class ProjectCompiler:
 
     def _type_table(self, scope: "Scope", variables) -> None:
         for var in variables:
-            var.type = scope.declarator_type(var.decl, var.decl)
+            var.type = scope.declarator_type(var.decl)
 
     def _type_proc(self, scope: "Scope", proc: ProcSym) -> None:
         node = proc.node
@@ -268,9 +266,6 @@ class ProjectCompiler:
             proc.return_type = scope.resolve_type(node.return_type, node) if node.return_type else SType("double")
 
     # ------------------------------------------------------------ generation
-    def add_unit(self, unit: CompiledUnit) -> None:
-        self.units.append(unit)
-
     def compile_module_init(self, module: ModuleSym) -> str:
         """_Init: module variables in source order (ch. 10 "Special Initialization")."""
         gen = ProcCompiler(self, module, None, None, f"I_{mangle(module.name)}", f"{module.name}._Init")
@@ -350,7 +345,7 @@ class Scope:
             return SType("lib", target, ref.rank)
         raise self.fail(UNDEFINED_SYMBOL, f"type {'.'.join(ref.parts)}", node)
 
-    def declarator_type(self, d: ast.Declarator, node) -> SType:
+    def declarator_type(self, d: ast.Declarator) -> SType:
         if d.type is None:
             raise self.fail(TYPE_MISMATCH, f"{d.name}: the data type must be specified (As type)", d)
         base = self.resolve_type(d.type, d)
@@ -432,7 +427,6 @@ class _Block:
 class _Loop:
     kind: str  # "for", "while", "do", "select", "dispatch"
     ident: int
-    on_exit: list[str] = field(default_factory=list)  # code before `break` (none)
     step: tuple | None = None  # For: (var node, step name) for Continue For
 
 
@@ -494,7 +488,7 @@ class ProcCompiler(Scope):
         if self.globals_assigned:
             self.lines.insert(header_end, "    global " + ", ".join(sorted(self.globals_assigned)))
             self.line_map = {(k + 1 if k > header_end else k): v for k, v in self.line_map.items()}
-        self.project.add_unit(CompiledUnit(self.gpl_name, self.py, "\n".join(self.lines) + "\n",
+        self.project.units.append(CompiledUnit(self.gpl_name, self.py, "\n".join(self.lines) + "\n",
                                            self.line_map, self.module.file))
 
     # ------------------------------------------------------------ initialisers
@@ -534,7 +528,7 @@ class ProcCompiler(Scope):
         if d.new:
             if d.init is not None:
                 raise self.fail(INVALID_STATEMENT, "New may not appear both after As and after =", d)
-            return self.new_object(ast.New(d.type, d.ctor_args, d.line, d.column), t)[0]
+            return self.new_object(ast.New(d.type, d.ctor_args, d.line, d.column))[0]
         if d.init is not None:
             code, vt = self.expr(d.init)
             return self.convert(code, vt, t)
@@ -592,7 +586,7 @@ class ProcCompiler(Scope):
         for d in s.items:
             if d.key in self.locals:
                 raise self.fail(DUPLICATE_SYMBOL, d.name, d)
-            t = self.declarator_type(d, s)
+            t = self.declarator_type(d)
             if "static" in s.modifiers:
                 py = f"T_{mangle(self.py, d.key)}"
                 self.project.statics[py] = None if t.rank else self.default(t)
@@ -1220,11 +1214,10 @@ class ProcCompiler(Scope):
         return self.address_of(e, None), None
 
     def e_New(self, e: ast.New):
-        scope_type = self.resolve_type(e.type, e)
-        return self.new_object(e, scope_type)
+        return self.new_object(e)
 
-    def new_object(self, e: ast.New, t: SType) -> tuple[str, SType]:
-        t = self.resolve_type(e.type, e) if e.type is not None else t
+    def new_object(self, e: ast.New) -> tuple[str, SType]:
+        t = self.resolve_type(e.type, e)
         args = e.args or []
         if t.base == "user":
             cls = t.ref
