@@ -38,6 +38,8 @@ class MotionSettings:
     program_speed: float = 100.0  # % ; 100 when a program starts
     next_speed: float | None = None  # SPEED without ALWAYS: the next motion only
     cartesian_speed_mm_s: float = 1000.0  # straight-line tool speed at 100 %
+    accel: float = 100.0  # % of the maximum acceleration
+    decel: float = 100.0  # % of the maximum deceleration
 
     def take(self) -> float:
         """Effective speed fraction for the motion about to start."""
@@ -120,6 +122,13 @@ class VirtualController:
     def speed(self, select: int = 1) -> float:
         return self.settings.monitor_speed if select == 0 else self.settings.program_speed
 
+    def set_accel(self, accel: float | None, decel: float | None) -> None:
+        """Acceleration and deceleration, percent of the maximum (1 to 100)."""
+        if accel is not None:
+            self.settings.accel = min(max(float(accel), 1.0), 100.0)
+        if decel is not None:
+            self.settings.decel = min(max(float(decel), 1.0), 100.0)
+
     def request_configuration(self, righty: bool) -> None:
         self._righty_request = righty
 
@@ -137,14 +146,15 @@ class VirtualController:
             return False
         return bool(np.all(np.abs(self.cell.robot_qpos() - self.q_command) <= self.fine))
 
-    def move(self, target: Location, straight: bool, accel: float = 1.0):
-        """Start a motion to `target` once the motion in progress is done.  `accel` scales
-        the joint acceleration limits for this motion (a GPL Profile's Accel; 1 = nominal)."""
+    def move(self, target: Location, straight: bool, cp: bool = True):
+        """Start a motion to `target` once the motion in progress is done.  `cp`: the motion
+        may blend into the next one (this controller stops at the end of every motion)."""
         if self._segment is not None:
             yield self._motion_done
         speed = self.settings.take()
         q0 = self.q_command
-        amax = self.kin.max_acceleration * accel
+        # One acceleration limit for the whole motion (toppra's bounds are symmetric).
+        amax = self.kin.max_acceleration * min(self.settings.accel, self.settings.decel) / 100.0
         try:
             if straight:
                 trajectory = plan_straight_move(

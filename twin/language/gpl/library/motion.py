@@ -6,15 +6,15 @@ How a motion maps onto the controller (docs/gpl.md, "Built-in classes"):
   motion; ``Controller.SystemSpeed`` (the monitor speed) scales every motion, as
   on the real controller.  For a straight line, 100 % is the controller's
   nominal Cartesian speed (scene ``cartesian_speed_mm_s``).
-* ``Profile.Accel`` / ``Decel`` (percent of nominal) scale the joints'
-  acceleration limits; the twin's planner (toppra) uses one limit for speeding
-  up and slowing down, min(Accel, Decel).  ``AccelRamp`` / ``DecelRamp`` (jerk
-  limits, s) and ``Speed2`` are kept but do not shape the twin's trajectories.
-* ``Profile.InRange``: < 0 the motion does not stop (no blending in the twin
-  yet: the next motion starts when this one's trajectory ends); 0 (default)
-  the trajectory ends at the destination, no settling check; > 0 the robot must
-  settle within the controller's FINE tolerance before the next motion starts
-  or ``WaitForEOM`` returns (the value itself is not a distance in the twin).
+* ``Profile.Accel`` / ``Decel`` (percent of nominal) are the controller's
+  acceleration and deceleration for the motion (``set_accel``).
+  ``AccelRamp`` / ``DecelRamp`` (jerk limits, s) and ``Speed2`` are kept but
+  do not shape the twin's trajectories.
+* ``Profile.InRange``: < 0 the motion may blend into the next one (the
+  controller's CP); 0 (default) it stops at its destination, no settling
+  check; > 0 the robot must also settle within the controller's FINE
+  tolerance before the next motion starts or ``WaitForEOM`` returns (the
+  value itself is not a distance in the twin).
 * Motions are queued one deep, as in the V+ forward processing the controller
   implements: ``Move.Loc`` returns at once while the robot is idle, and waits
   for the motion in progress otherwise.
@@ -110,9 +110,6 @@ class GplProfile:
         copy._straight, copy._text = self._straight, self._text
         return copy
 
-    def accel_fraction(self) -> float:
-        return min(self.Accel, self.Decel) / 100.0
-
 
 def profile_arg(value) -> GplProfile:
     if value is None:
@@ -164,8 +161,9 @@ def _go(rt, flange: Location, profile: GplProfile, righty: bool | None, dest_q: 
     robot.set_speed(profile.Speed)  # this motion only
     if righty is not None and not profile.Straight:  # a straight line keeps the configuration
         robot.request_configuration(righty)
+    robot.set_accel(profile.Accel, profile.Decel)
     try:
-        yield from robot.move(flange, straight=profile.Straight, accel=profile.accel_fraction())
+        yield from robot.move(flange, straight=profile.Straight, cp=profile.InRange < 0)
     except ProgramError as err:
         raise codes.from_controller(err) from None
     state.source = source
