@@ -652,3 +652,45 @@ def test_twin_run_project_folder(tmp_path, capsys):
     assert f"{tmp_path / 'Main.gpl'}:5:9: Divide by zero (-702) in Cell.Main" in captured.err
     data = json.loads(report.read_text())
     assert data["output"] == "hello\n" and data["errors"][0]["code"] == -702
+
+
+def test_goto_inside_loops_and_out_of_them():
+    """Ch. 9 (L1388, L1404): a GoTo may skip to a label in the loop body or leave
+    the loop; Exit For still works in a body that holds labels."""
+    out = output_of("""
+Sub Main()
+    Dim i, n As Integer
+    For i = 1 To 6
+        If i Mod 2 = 0 Then GoTo skip
+        n += i
+        If i = 5 Then Exit For
+skip:
+    Next
+    Console.WriteLine(n & " " & i)
+    Do
+        n -= 1
+        If n < 5 Then GoTo done
+    Loop
+done:
+    Console.WriteLine("done " & n)
+End Sub
+""")
+    assert lines(out) == ["9 5", "done 4"]
+
+
+def test_windows_text_files(tmp_path):
+    """Files from a Windows editor: byte-order mark and CR LF line ends."""
+    from gpl_helpers import Clock, NoRobot
+    from twin.controller.io import DigitalIO
+    from twin.controller.scheduler import Scheduler
+    from twin.language.vplus.runtime import Console
+
+    path = tmp_path / "Main.gpl"
+    path.write_bytes(b'\xef\xbb\xbfSub Main()\r\n    Console.WriteLine("ok") \' note\r\nEnd Sub\r\n')
+    scheduler = Scheduler()
+    system = GplSystem(NoRobot(), DigitalIO(), Clock(), scheduler, Console(echo=None))
+    system.load_files([path])
+    thread = system.start("Main")
+    while scheduler.alive:
+        scheduler.run_cycle()
+    assert thread.error is None and system.console.output == "ok\n"

@@ -44,6 +44,7 @@ def _code_part(line: str) -> str:
 
 def prepare(text: str) -> str:
     """Blank comments, `#` lines and REM lines (keeping line numbers); mark continuations."""
+    text = text.removeprefix("\ufeff").removeprefix("\xef\xbb\xbf")  # a byte-order mark from a Windows editor
     lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
     out = []
     for raw in lines:

@@ -42,7 +42,8 @@ def read_project(folder: Path) -> ProjectFile:
         raise ProgramError(f"{message(PROJECT_FILE_ERROR)}: no Project.gpr in {folder}", PROJECT_FILE_ERROR,
                            file=str(folder))
     name, start, sources = folder.name, None, []
-    for number, raw in enumerate(gpr.read_text(encoding="latin-1").splitlines(), start=1):
+    text = gpr.read_text(encoding="latin-1").removeprefix("\xef\xbb\xbf")  # byte-order mark
+    for number, raw in enumerate(text.splitlines(), start=1):
         line = raw.strip()
         if not line or line.startswith("'") or line.lower() in ("projectbegin", "projectend"):
             continue

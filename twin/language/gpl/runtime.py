@@ -489,6 +489,14 @@ class GplThread:
             self.finished = True
 
 
+def _delegate_named(rt, name, kind: str, params: int) -> Delegate:
+    """New Template("proc"): found when the New runs (ch. 10, AddressOf vs. String)."""
+    proc = rt.system.find_procedure(values._cstr(name))
+    if proc.kind != kind or len(proc.params) != params or proc.instance:
+        raise fail(TYPE_MISMATCH, f"{proc.name} does not match the Delegate")
+    return Delegate(rt.system.namespace[proc.py], None, proc.qualified, bool(proc.byref_positions))
+
+
 # The names generated code sees, besides L_<class> and the project's own.
 _NAMESPACE = {
     "GplArray": values.GplArray,
@@ -498,18 +506,7 @@ _NAMESPACE = {
     "_case_value": _case_value, "_catch": _catch, "_throw": _throw, "_rethrow": _rethrow, "_Ref": Ref,
     "_STRING": {k: v[0] for k, v in builtins.STRING_MEMBERS.items()},
     "_STRING_SHARED": builtins.STRING_SHARED,
-    "_delegate_named": None,  # set below
+    "_delegate_named": _delegate_named,
     **{f"F_{name}": fn for name, (fn, _rt) in builtins.FUNCTIONS.items()},
     **{name: getattr(values, name) for name in dir(values) if name.startswith("_") and not name.startswith("__")},
 }
-
-
-def _delegate_named(rt, name, kind: str, params: int) -> Delegate:
-    """New Template("proc"): found when the New runs (ch. 10, AddressOf vs. String)."""
-    proc = rt.system.find_procedure(values._cstr(name))
-    if proc.kind != kind or len(proc.params) != params or proc.instance:
-        raise fail(TYPE_MISMATCH, f"{proc.name} does not match the Delegate")
-    return Delegate(rt.system.namespace[proc.py], None, proc.qualified, bool(proc.byref_positions))
-
-
-_NAMESPACE["_delegate_named"] = _delegate_named
