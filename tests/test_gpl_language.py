@@ -694,3 +694,39 @@ def test_windows_text_files(tmp_path):
     while scheduler.alive:
         scheduler.run_cycle()
     assert thread.error is None and system.console.output == "ok\n"
+
+
+def test_exception_object_members():
+    """Ch. 11 Table 11-1: ErrorCode, Qualifier, RobotError, RobotNum, Axis (r/w),
+    Message, Clone (an independent copy), UpdateErrorCode."""
+    out = output_of("""
+Sub Main()
+    Dim e As New Exception
+    Dim c As Exception
+    e.ErrorCode = -702
+    e.Qualifier = 3
+    c = e.Clone
+    e.UpdateErrorCode(-703)
+    Console.WriteLine(e.ErrorCode & " " & e.Message & " | " & c.ErrorCode & " " & c.Qualifier & " " & c.Message)
+    e.RobotError = True
+    e.RobotNum = 1
+    e.Axis = &H4
+    Console.WriteLine(e.RobotError & " " & e.RobotNum & " " & e.Axis & " " & e.Message)
+End Sub
+""")
+    assert lines(out) == [
+        "-703 Numeric overflow | -702 3 Divide by zero",
+        "True 1 4 Numeric overflow: Robot 1: Axis &H4",
+    ]
+
+
+def test_exception_message_knows_library_codes():
+    """An ErrorCode set by the program shows the built-in classes' message too."""
+    out = output_of("""
+Sub Main()
+    Dim e As New Exception
+    e.ErrorCode = -323
+    Console.WriteLine(e.Message)
+End Sub
+""")
+    assert out == "Device full\n"

@@ -223,6 +223,15 @@ def _sqrt(x) -> float:
 
 
 # ---------------------------------------------------------------- Exception
+def _library_messages() -> dict[int, str]:
+    """The built-in classes' (code, message) pairs (library/codes.py), by code."""
+    from .library import codes
+
+    return {v[0]: v[1] for v in vars(codes).values()
+            if isinstance(v, tuple) and len(v) == 2 and isinstance(v[0], int) and isinstance(v[1], str)}
+
+
+
 @gpl_class("Exception")
 class GplException:
     """Table 11-1.  `New Exception` is empty; `New Exception(code[, qualifier])`
@@ -296,7 +305,7 @@ class GplException:
 
     def Message(self) -> str:
         """The full text: `*message*` with the robot or qualifier details (twin format)."""
-        text = self._text or message(self._code)
+        text = self._text or _library_messages().get(self._code) or message(self._code)
         if self._robot_error:
             text += f": Robot {self._robot_num}" + (f": Axis &H{self._axis:X}" if self._axis else "")
         return text
