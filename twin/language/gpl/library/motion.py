@@ -10,8 +10,9 @@ How a motion maps onto the controller (docs/gpl.md, "Built-in classes"):
   acceleration and deceleration for the motion (``set_accel``).
   ``AccelRamp`` / ``DecelRamp`` (jerk limits, s) and ``Speed2`` are kept but
   do not shape the twin's trajectories.
-* ``Profile.InRange``: < 0 the motion may blend into the next one (the
-  controller's CP); 0 (default) it stops at its destination, no settling
+* ``Profile.InRange``: < 0 the motion may blend into the next one (the next
+  motion is issued with the controller's CP on); 0 (default) it stops at its
+  destination, no settling
   check; > 0 the robot must also settle within the controller's FINE
   tolerance before the next motion starts or ``WaitForEOM`` returns (the
   value itself is not a distance in the twin).
@@ -155,15 +156,14 @@ def _go(rt, flange: Location, profile: GplProfile, righty: bool | None, dest_q: 
     robot = rt.robot
     if state.last_in_range > 0:
         yield from _settle(rt)
-    elif robot.moving:
-        yield lambda: not robot.moving
     source = robot.destination()
     robot.set_speed(profile.Speed)  # this motion only
     if righty is not None and not profile.Straight:  # a straight line keeps the configuration
         robot.request_configuration(righty)
     robot.set_accel(profile.Accel, profile.Decel)
     try:
-        yield from robot.move(flange, straight=profile.Straight, cp=profile.InRange < 0)
+        # Blend into this motion only when the previous one was not to stop (its InRange < 0).
+        yield from robot.move(flange, straight=profile.Straight, cp=state.last_in_range < 0)
     except ProgramError as err:
         raise codes.from_controller(err) from None
     state.source = source
