@@ -55,7 +55,8 @@ End Module
 
 
 def test_me_and_shared_members():
-    """Ch. 5: Me is the current object; a Shared field has one copy (Class.item)."""
+    """Ch. 5: Me is the current object; a Shared field has one copy (Class.item);
+    `Is` compares references (and VB.NET's `IsNot` is accepted)."""
     out = output_of("""
 Public Class node
     Public Shared made As Integer
@@ -71,10 +72,10 @@ End Class
 Sub Main()
     Dim a As New node(3)
     Dim b As New node(4)
-    Console.WriteLine(node.made & " " & (a.Self() Is a) & " " & (a Is b) & " " & b.Self.value)
+    Console.WriteLine(node.made & " " & (a.Self() Is a) & " " & (a Is b) & " " & b.Self.value & " " & (a IsNot b))
 End Sub
 """)
-    assert out == "2 True False 4\n"
+    assert out == "2 True False 4 True\n"
 
 
 def test_objects_byval_and_byref():

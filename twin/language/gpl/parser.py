@@ -151,6 +151,12 @@ class _ToAst(Transformer):
     def is_(self, meta, c):
         return self._binary(meta, "is", c[0], c[1])
 
+    def isnot(self, meta, c):
+        """`a IsNot b` (VB.NET 2005) is `Not a Is b`."""
+        node = ast.Unary("not", self._binary(meta, "is", c[0], c[1]))
+        node.line, node.column = meta.line, meta.column
+        return node
+
     def concat(self, meta, c):
         return self._binary(meta, "&", c[0], c[1])
 
