@@ -137,3 +137,17 @@ def test_pallet_frame_drives_the_robot_through_a_grid(tmp_path):
     assert report.errors == []
     # Loc's rotation Ry(180) Rz(180) is diag(1, -1, -1): rows go along +X, columns along -Y.
     assert report.output.splitlines() == ["300,-100", "340,-100", "300,-130", "340,-130"]
+
+
+def test_cycle_matches_the_evplus_demo_motion_for_motion():
+    """The GPL project moves like move_parts.pg: the same points, approach heights, speeds
+    and hand times, so the first put-downs come at the same simulated times."""
+    vplus = run_program(ROOT / "programs" / "vplus" / "move_parts.pg", scene=SCENE, max_sim_time=8.0).report
+    gpl = run_program(PROJECT, scene=SCENE, max_sim_time=8.0).report
+
+    def times(report, kind):
+        return [round(e["time"], 3) for e in report.events if e["kind"] == kind]
+
+    assert len(times(gpl, "release")) >= 3
+    assert times(gpl, "grasp") == times(vplus, "grasp")
+    assert times(gpl, "release") == times(vplus, "release")
