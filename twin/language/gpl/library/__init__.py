@@ -54,8 +54,11 @@ class GplRuntime(Protocol):
     def current_thread(self) -> Any: ...
 
     def start_thread(self, delegate: Any, name: str) -> Any: ...
-    # Run a GPL procedure (a delegate / AddressOf) as a new cooperative thread;
-    # returns a handle with `.alive` (bool) and `.error` (GplError or None).
+    # Run a GPL procedure (a delegate / AddressOf, or its name as a String:
+    # "proc", "module.proc", "class.proc") as a new cooperative thread; returns
+    # a handle with `.alive` (bool), `.error` (None, or the ProgramError that
+    # stopped it: `.code`, `.message`, located in the source), `.name`,
+    # `.procedure`, and `abort()`, `suspend()`, `resume()`.
 
 
 def gpl_class(name: str) -> Callable[[type], type]:
