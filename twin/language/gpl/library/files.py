@@ -120,7 +120,8 @@ def _nvram(rt, name: str, switches: dict | None = None, create: bool = False) ->
     return files[name]
 
 
-def _read_bytes(rt, path: str) -> bytes:
+def read_bytes(rt, path: str) -> bytes:
+    """The bytes of a file on any device (switches after the path are ignored)."""
     path, _ = _split_switches(path)
     name = _nvram_name(path)
     if name is not None:
@@ -136,7 +137,7 @@ class StreamReader:
     """Reads a file byte by byte or line by line (Table 15-3)."""
 
     def __init__(self, rt, path):
-        self._data = _read_bytes(rt, str(path))
+        self._data = read_bytes(rt, str(path))
         self._pos = 0
         self._open = True
 
@@ -244,17 +245,17 @@ class File:
     @shared
     def ComputeCRC(rt, path) -> int:
         """CRC-32 (zlib's polynomial; the manual does not name one) of the file's bytes."""
-        return zlib.crc32(_read_bytes(rt, str(path)))
+        return zlib.crc32(read_bytes(rt, str(path)))
 
     @shared
     def ComputeLength(rt, path) -> int:
-        return len(_read_bytes(rt, str(path)))
+        return len(read_bytes(rt, str(path)))
 
     Length = ComputeLength
 
     @shared
     def Copy(rt, source, destination, overwrite=False) -> None:
-        data = _read_bytes(rt, str(source))
+        data = read_bytes(rt, str(source))
         target = sandbox_path(rt, str(destination))
         if target.exists() and not overwrite:
             raise codes.fail(codes.INVALID_PATH, f"{destination} exists")

@@ -25,7 +25,7 @@ from . import codes
 from . import byref, gpl_class
 from .members import stored
 from .net import IPEndPoint, LOOPBACK
-from .thread import _wait_ms
+from .thread import wait_ms
 
 DEFAULT_PORT = 502
 UNIT_ID = 1
@@ -85,7 +85,7 @@ class Modbus:
             frame = self._frame()
             if frame is not None:
                 break
-            yield from _wait_ms(self._rt, timeout if timeout > 0 else -1,
+            yield from wait_ms(self._rt, timeout if timeout > 0 else -1,
                                 until=lambda: bool(select.select([sock], [], [], 0)[0]))
             if not select.select([sock], [], [], 0)[0]:
                 raise codes.fail(codes.MODBUS_TIMEOUT, f"no response in {timeout:g} ms")

@@ -25,7 +25,7 @@ import socket
 from . import codes
 from . import byref, gpl_class
 from .members import stored
-from .thread import _wait_ms
+from .thread import wait_ms
 
 LOOPBACK = "127.0.0.1"
 RECEIVE_CHUNK = 65536
@@ -151,7 +151,7 @@ class Socket:
         if not self._blocking:
             raise codes.fail(codes.SOCKET_TIMEOUT, "no data (non-blocking socket)")
         timeout = self._receive_timeout
-        yield from _wait_ms(self._rt, timeout if timeout > 0 else -1, until=lambda: _readable(sock))
+        yield from wait_ms(self._rt, timeout if timeout > 0 else -1, until=lambda: _readable(sock))
         if not _readable(sock):
             raise codes.fail(codes.SOCKET_TIMEOUT, f"nothing received in {timeout:g} ms")
         return True
@@ -253,7 +253,7 @@ class TcpListener:
         """Wait for a connection request and accept it."""
         sock = self._s()
         if not _readable(sock):
-            yield from _wait_ms(self._rt, -1, until=lambda: _readable(sock))
+            yield from wait_ms(self._rt, -1, until=lambda: _readable(sock))
         try:
             conn, (host, port) = sock.accept()
         except OSError as err:

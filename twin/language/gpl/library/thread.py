@@ -38,7 +38,7 @@ def _objects(rt) -> dict:
     return robot_state(rt).threads
 
 
-def _wait_ms(rt, ms: float, until=None):
+def wait_ms(rt, ms: float, until=None):
     """Wait `ms` of simulated time (< 0: forever), or until `until()` is true."""
     clock = rt.clock
     end = None if ms < 0 else clock() + ms / 1000.0
@@ -126,7 +126,7 @@ class GplThread:
             return True
         timeout = float(timeout_ms)
         if timeout != 0:
-            yield from _wait_ms(self._rt, timeout, until=lambda: not handle.alive)
+            yield from wait_ms(self._rt, timeout, until=lambda: not handle.alive)
         return not handle.alive
 
     def _control(self, action: str) -> None:
@@ -166,7 +166,7 @@ class GplThread:
         ms = float(ms)
         if ms < 0:
             raise codes.fail(codes.INVALID_ARGUMENT, f"Thread.Sleep({ms:g})")
-        yield from _wait_ms(rt, ms)
+        yield from wait_ms(rt, ms)
 
     @byref(0)
     @shared
@@ -188,7 +188,7 @@ class GplThread:
 
         timeout = float(timeout_ms)
         if not received() and timeout != 0:
-            yield from _wait_ms(rt, timeout, until=lambda: received() != 0)
+            yield from wait_ms(rt, timeout, until=lambda: received() != 0)
         got = received()
         events[me] = events.get(me, 0) & ~got
         return got

@@ -27,7 +27,7 @@ from xml.parsers.expat import ExpatError
 from ..errors import GplError
 from . import codes
 from . import byref, gpl_class, shared
-from .files import _read_bytes, sandbox_path
+from .files import read_bytes, sandbox_path
 from .members import stored
 
 TYPE_NAMES = {
@@ -117,7 +117,7 @@ class XmlDoc:
 
     @shared
     def LoadFile(rt, path, options=0) -> "XmlDoc":
-        return XmlDoc.LoadString(rt, _read_bytes(rt, str(path)).decode("latin-1"))
+        return XmlDoc.LoadString(rt, read_bytes(rt, str(path)).decode("latin-1"))
 
     def text(self) -> str:
         return self._dom.toxml()
