@@ -657,7 +657,8 @@ def test_twin_run_project_folder(tmp_path, capsys):
 
 def test_goto_inside_loops_and_out_of_them():
     """Ch. 9 (L1388, L1404): a GoTo may skip to a label in the loop body or leave
-    the loop; Exit For still works in a body that holds labels."""
+    the loop; Exit For still works in a body that holds labels; a label may be
+    a keyword, as `exit:` in the manual's TftpWrite example (L2499-2567)."""
     out = output_of("""
 Sub Main()
     Dim i, n As Integer
@@ -670,9 +671,9 @@ skip:
     Console.WriteLine(n & " " & i)
     Do
         n -= 1
-        If n < 5 Then GoTo done
+        If n < 5 Then GoTo exit
     Loop
-done:
+exit:
     Console.WriteLine("done " & n)
 End Sub
 """)

@@ -209,7 +209,7 @@ class _ToAst(Transformer):
         return ast.Goto(label=str(c[0]).lower(), **_pos(meta))
 
     def label_ref(self, meta, c):
-        return c[0]
+        return c[0]  # a name, a number, or a keyword: the manual's TftpWrite jumps to `exit:`
 
     def block_kind(self, meta, c):
         return str(c[0]).lower()
