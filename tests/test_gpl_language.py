@@ -732,3 +732,21 @@ Sub Main()
 End Sub
 """)
     assert out == "Device full\n"
+
+
+def test_method_of_nothing_is_reported_at_the_call():
+    """Ch. 5 (L919): using a member of an object variable that is Nothing is an
+    error, reported at the calling statement."""
+    error = error_of("""
+Class C
+    Public n As Integer
+    Public Sub Bump()
+        n += 1
+    End Sub
+End Class
+Sub Main()
+    Dim c As C
+    c.Bump
+End Sub
+""")
+    assert (error.code, error.line, error.column) == (-705, 10, 5)

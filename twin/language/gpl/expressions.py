@@ -532,7 +532,8 @@ class ExpressionCompiler(Scope):
                             f"{proc.name} takes {len(proc.params)} argument(s), {len(args)} given", e)
         if proc.instance and me is None:
             raise self.fail(INVALID_STATEMENT, f"{proc.name} needs an object: object.{proc.name}", e)
-        codes = ([self.me_code() if me == "me" else me] if proc.instance else [])
+        # obj.Method on Nothing fails here, at the call, not inside the method
+        codes = ([self.me_code() if me == "me" else f"_object({me})"] if proc.instance else [])
         codes += [self.expr(a)[0] for a in args]
         call = f"(yield from {proc.py}({', '.join(['rt'] + codes)}))"
         if not proc.byref_positions:

@@ -220,6 +220,12 @@ def _redim(array, dims: tuple, default):
     return array
 
 
+def _object(obj):
+    if obj is None:
+        raise fail(NULL_OBJECT, "calling a method of Nothing")
+    return obj
+
+
 def _case_value(v):
     return v if v.__class__ is str else values._num(v)
 
@@ -503,7 +509,7 @@ _NAMESPACE = {
     "_Jump": _Jump, "_Break": _Break, "_ExitTry": _ExitTry, "_CONTROL": _Control,
     "_Delegate": Delegate, "_invoke": _invoke, "_w": _w, "_callm": _callm, "_setm": _setm,
     "_setattr": _setattr, "_call": _call, "_setindex": _setindex, "_redim": _redim,
-    "_case_value": _case_value, "_catch": _catch, "_throw": _throw, "_rethrow": _rethrow, "_Ref": Ref,
+    "_case_value": _case_value, "_object": _object, "_catch": _catch, "_throw": _throw, "_rethrow": _rethrow, "_Ref": Ref,
     "_STRING": {k: v[0] for k, v in builtins.STRING_MEMBERS.items()},
     "_STRING_SHARED": builtins.STRING_SHARED,
     "_delegate_named": _delegate_named,
