@@ -750,3 +750,57 @@ Sub Main()
 End Sub
 """)
     assert (error.code, error.line, error.column) == (-705, 10, 5)
+
+
+def test_byref_module_variable_is_a_real_reference_across_threads():
+    """Ch. 10 "Procedure Arguments" and ch. 18 (L3351-3367): acquire_sem(ByRef
+    lock) spins on the caller's module variable itself, so a thread waiting
+    for the lock sees the holder release it even while it waits in the callee;
+    a ByRef array element and field are references too."""
+    out = output_of("""
+Class Box
+    Public n As Integer
+End Class
+Module Locks
+    Public my_lock As Integer
+    Public inside As Integer
+    Public most As Integer
+    Public Sub acquire_sem(ByRef lock As Integer)
+        While Thread.TestAndSet(lock, 1) <> 0
+            Thread.Sleep(1)
+        End While
+    End Sub
+    Public Sub release_sem(ByRef lock As Integer)
+        lock = 0
+    End Sub
+    Public Sub Work()
+        Dim i As Integer
+        For i = 1 To 5
+            acquire_sem(my_lock)
+            inside += 1
+            If inside > most Then most = inside
+            Thread.Sleep(20)       ' hold the lock across a wait
+            inside -= 1
+            release_sem(my_lock)
+        Next
+    End Sub
+    Sub Bump(ByRef x As Integer)
+        x += 1
+    End Sub
+    Public Sub Main()
+        Dim a As New Thread("Work")
+        Dim b As New Thread("Work")
+        Dim arr(2) As Integer
+        Dim bx As New Box
+        a.Start
+        b.Start
+        a.Join(-1)
+        b.Join(-1)
+        Bump(arr(1))
+        Bump(bx.n)
+        Bump(bx.n)
+        Console.WriteLine(most & " " & my_lock & " " & arr(1) & " " & bx.n)
+    End Sub
+End Module
+""")
+    assert out == "1 0 1 2\n"

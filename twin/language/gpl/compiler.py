@@ -11,10 +11,10 @@ Storage (User Manual ch. 4 and 10):
   * module variables, Static locals and Shared class fields -> globals of the
     project's one Python namespace (`V_module__name`), shared by all threads;
   * object fields -> attributes `f_name` of the object.
-Calls: `P_module__proc(rt, [me,] args...)`; a procedure with ByRef parameters
-returns `(result, (final values of its ByRef parameters))` and the caller
-writes those back (value-result: the same as passing a reference to a
-program that does not share the variable with another thread in mid-call).
+Calls: `P_module__proc(rt, [me,] args...)`.  A ByRef parameter receives a
+reference object whose `.value` is the caller's variable (a module variable,
+field or array element where it lives; a caller's local through a cell copied
+back after the call, as no other thread can see it).
 GoTo: a statement list that holds labels is compiled as a dispatch loop over
 its segments, and GoTo raises `_Jump(block, segment)` caught there.
 Each generated line maps back to its GPL statement, for errors.

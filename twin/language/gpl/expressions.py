@@ -127,6 +127,8 @@ class ExpressionCompiler(Scope):
             self.emit(depth, f"{var.py} = {code}")
         elif var.kind == "field":
             self.emit(depth, f"{self.me_code()}.{var.py} = {code}")
+        elif var.byref:
+            self.emit(depth, f"{var.py}.value = {code}")
         else:
             self.emit(depth, f"{var.py} = {code}")
 
@@ -317,6 +319,8 @@ class ExpressionCompiler(Scope):
     def var_code(self, var: VarSym) -> str:
         if var.kind == "field":
             return f"{self.me_code()}.{var.py}"
+        if var.byref:
+            return f"{var.py}.value"
         return var.py
 
     def e_Member(self, e: ast.Member):
@@ -389,8 +393,7 @@ class ExpressionCompiler(Scope):
             self.check_delegate_signature(dsym, proc, e)
         if proc.instance and me == "None":
             raise self.fail(INVALID_STATEMENT, f"AddressOf {proc.name} needs an object", e)
-        return f"_Delegate({proc.py}, {me if proc.instance else 'None'}, {proc.qualified!r}, " \
-               f"{bool(proc.byref_positions)})"
+        return f"_Delegate({proc.py}, {me if proc.instance else 'None'}, {proc.qualified!r})"
 
     def check_delegate_signature(self, dsym: DelegateSym, proc: ProcSym, node) -> None:
         """The procedure must match the Delegate statement exactly (ch. 10)."""
@@ -512,9 +515,13 @@ class ExpressionCompiler(Scope):
         if len(args) != len(dsym.params):
             raise self.fail(WRONG_ARGUMENT_COUNT, f"Delegate {dsym.name} takes {len(dsym.params)}", e)
         scope = Scope(self.project, dsym.module, None)
-        codes = [self.convert(*self.expr(a), scope.param_type(p, e)) for a, p in zip(args, dsym.params)]
+        codes, write_back = [], []
+        for a, p in zip(args, dsym.params):
+            t = scope.param_type(p, e)
+            codes.append(self.reference(a, t, write_back) if p.byref else self.convert(*self.expr(a), t))
         rtype = scope.resolve_type(dsym.return_type, e) if dsym.kind == "function" and dsym.return_type else None
-        return f"(yield from _invoke(rt, {code}, ({', '.join(codes)}{',' if codes else ''})))", rtype
+        call = f"(yield from _invoke(rt, {code}, ({', '.join(codes)}{',' if codes else ''})))"
+        return self.finish_call(call, write_back), rtype
 
     def call_builtin(self, key: str, args, e) -> tuple[str, SType | None]:
         fn, takes_rt = FUNCTIONS[key]
@@ -534,18 +541,57 @@ class ExpressionCompiler(Scope):
             raise self.fail(INVALID_STATEMENT, f"{proc.name} needs an object: object.{proc.name}", e)
         # obj.Method on Nothing fails here, at the call, not inside the method
         codes = ([self.me_code() if me == "me" else f"_object({me})"] if proc.instance else [])
-        codes += [self.expr(a)[0] for a in args]
-        call = f"(yield from {proc.py}({', '.join(['rt'] + codes)}))"
-        if not proc.byref_positions:
-            return call, proc.return_type
-        # Value-result (see the module docstring): the call runs first, then the
-        # final values of the ByRef parameters go back to the caller's variables.
+        write_back: list = []
+        for a, p, t in zip(args, proc.params, proc.param_types):
+            codes.append(self.reference(a, t, write_back) if p.byref else self.expr(a)[0])
+        return self.finish_call(f"(yield from {proc.py}({', '.join(['rt'] + codes)}))", write_back), proc.return_type
+
+    def reference(self, arg: ast.Expr, t: SType, write_back: list) -> str:
+        """A ByRef argument (ch. 10): a reference to the caller's variable, so the
+        callee reads and writes it where it lives (module variables, fields and
+        array elements are shared with other threads: acquire_sem(ByRef lock)
+        of ch. 18 needs a real reference).  A local of the caller, which no
+        other thread sees, goes in a cell that is copied back after the call."""
+        if isinstance(arg, ast.Name):
+            sym = self.lookup_value(arg.key, arg)
+            if isinstance(sym, VarSym) and not sym.const:
+                if sym.byref:
+                    return sym.py  # pass the caller's reference on
+                if sym.kind in ("module", "shared", "static"):
+                    return f"_GlobalRef(globals(), {sym.py!r})"
+                if sym.kind == "field":
+                    return f"_AttrRef({self.me_code()}, {sym.py!r})"
+                cell = self.fresh("ref")
+                self.emit(self.depth, f"{cell} = _Ref({sym.py})")
+                write_back.append((arg, cell, t))
+                return cell
+        if isinstance(arg, ast.Member):
+            ocode, ot = self.expr_or_ns(arg.obj)
+            sym = None
+            if ot is not None and ot.base == "user" and not ot.rank:
+                sym = self.class_member(ot.ref, arg.key, arg)
+            elif ot is not None and ot.base == "ns" and isinstance(ot.ref, (ModuleSym, ClassSym)):
+                sym = self.member_of_namespace(ot.ref, arg.key, arg)
+            if isinstance(sym, VarSym) and not sym.const:
+                if sym.kind in ("module", "shared"):
+                    return f"_GlobalRef(globals(), {sym.py!r})"
+                return f"_AttrRef(_object({ocode}), {sym.py!r})"
+        if isinstance(arg, ast.Call):
+            fcode, ft = self.expr_or_ns(arg.func)
+            if ft is not None and ft.is_array and len(arg.args) == ft.rank:
+                index = self.indices(arg.args)
+                return f"_ItemRef({fcode}, ({index}{',' if len(arg.args) == 1 else ''}))"
+        return f"_Ref({self.expr(arg)[0]})"  # an expression: nothing to write back
+
+    def finish_call(self, call: str, write_back: list) -> str:
+        """A call whose ByRef cells must be copied back runs before the statement."""
+        if not write_back:
+            return call
         temp = self.fresh("r")
         self.emit(self.depth, f"{temp} = {call}")
-        for k, i in enumerate(proc.byref_positions):
-            if _is_variable(args[i]):
-                self.store(args[i], f"{temp}[1][{k}]", proc.param_types[i], self.depth)
-        return f"{temp}[0]", proc.return_type
+        for arg, cell, t in write_back:
+            self.store(arg, f"{cell}.value", t, self.depth)
+        return temp
 
     def call_member(self, ocode: str, ot: SType | None, func: ast.Member, args, e, statement: bool,
                     no_parens: bool) -> tuple[str, SType | None]:

@@ -73,15 +73,65 @@ SLICE = _Slice()
 class Delegate:
     """A Delegate object: a procedure and, for a class method, its object."""
 
-    def __init__(self, fn: Callable, me: Any, name: str, byref: bool):
+    def __init__(self, fn: Callable, me: Any, name: str):
         self.fn = fn
         self.me = me
         self.name = name
-        self.byref = byref
 
     def run(self, rt, args: tuple):
-        result = yield from (self.fn(rt, self.me, *args) if self.me is not None else self.fn(rt, *args))
-        return result[0] if self.byref else result
+        return (yield from (self.fn(rt, self.me, *args) if self.me is not None else self.fn(rt, *args)))
+
+
+# ------------------------------------------------------------------ ByRef references
+class _GlobalRef:
+    """A ByRef argument that is a module variable, Static or Shared field."""
+
+    __slots__ = ("table", "name")
+
+    def __init__(self, table: dict, name: str):
+        self.table, self.name = table, name
+
+    @property
+    def value(self):
+        return self.table[self.name]
+
+    @value.setter
+    def value(self, v) -> None:
+        self.table[self.name] = v
+
+
+class _AttrRef:
+    """A ByRef argument that is a field of an object."""
+
+    __slots__ = ("obj", "name")
+
+    def __init__(self, obj, name: str):
+        self.obj, self.name = obj, name
+
+    @property
+    def value(self):
+        return getattr(self.obj, self.name)
+
+    @value.setter
+    def value(self, v) -> None:
+        setattr(self.obj, self.name, v)
+
+
+class _ItemRef:
+    """A ByRef argument that is an array element."""
+
+    __slots__ = ("array", "index")
+
+    def __init__(self, array, index: tuple):
+        self.array, self.index = array, index if len(index) > 1 else index[0]
+
+    @property
+    def value(self):
+        return self.array[self.index]
+
+    @value.setter
+    def value(self, v) -> None:
+        self.array[self.index] = v
 
 
 def _invoke(rt, delegate, args: tuple):
@@ -134,7 +184,8 @@ def _callm(rt, obj, key: str, args: tuple | None):
             value = rt.system.namespace[entry[1]]
             return value[args if len(args) > 1 else args[0]] if args else value
         if kind == "method":
-            return _unwrap(entry[1](rt, obj, *(args or ())) if entry[2] else entry[1](rt, *(args or ())), entry[3])
+            args = tuple(Ref(a) if i in entry[3] else a for i, a in enumerate(args or ()))
+            return entry[1](rt, obj, *args) if entry[2] else entry[1](rt, *args)
         if kind == "property":
             return entry[1](rt, obj, *(args or ())) if entry[3] else entry[1](rt, *(args or ()))
         raise fail(UNDEFINED_SYMBOL, key)
@@ -146,19 +197,6 @@ def _callm(rt, obj, key: str, args: tuple | None):
     if getattr(raw, "gpl_shared", False):
         return getattr(obj, attr)(rt, *(args or ()))
     return getattr(obj, attr)(*(args or ()))
-
-
-def _unwrap(result, byref: bool):
-    if not byref:
-        return result
-    if result.__class__ is types.GeneratorType:
-        return _first(result)
-    return result[0]
-
-
-def _first(gen):
-    result = yield from gen
-    return result[0]
 
 
 def _setm(rt, obj, key: str, args: tuple | None, value):
@@ -353,7 +391,7 @@ class GplSystem:
             convert = ns.get(values.CONVERT.get(var.type.base, ""), lambda v: v) if not var.type.rank else (lambda v: v)
             table[key] = ("field" if var.kind == "field" else "shared", var.py, convert)
         for key, proc in cls.methods.items():
-            table[key] = ("method", ns[proc.py], proc.instance, bool(proc.byref_positions))
+            table[key] = ("method", ns[proc.py], proc.instance, frozenset(proc.byref_positions))
         for key, prop in cls.properties.items():
             table[key] = ("property", ns.get(prop.getter_py), ns.get(prop.setter_py), not prop.shared)
         return table
@@ -500,7 +538,7 @@ def _delegate_named(rt, name, kind: str, params: int) -> Delegate:
     proc = rt.system.find_procedure(values._cstr(name))
     if proc.kind != kind or len(proc.params) != params or proc.instance:
         raise fail(TYPE_MISMATCH, f"{proc.name} does not match the Delegate")
-    return Delegate(rt.system.namespace[proc.py], None, proc.qualified, bool(proc.byref_positions))
+    return Delegate(rt.system.namespace[proc.py], None, proc.qualified)
 
 
 # The names generated code sees, besides L_<class> and the project's own.
@@ -509,7 +547,7 @@ _NAMESPACE = {
     "_Jump": _Jump, "_Break": _Break, "_ExitTry": _ExitTry, "_CONTROL": _Control,
     "_Delegate": Delegate, "_invoke": _invoke, "_w": _w, "_callm": _callm, "_setm": _setm,
     "_setattr": _setattr, "_call": _call, "_setindex": _setindex, "_redim": _redim,
-    "_case_value": _case_value, "_object": _object, "_catch": _catch, "_throw": _throw, "_rethrow": _rethrow, "_Ref": Ref,
+    "_case_value": _case_value, "_object": _object, "_catch": _catch, "_throw": _throw, "_rethrow": _rethrow, "_Ref": Ref, "_GlobalRef": _GlobalRef, "_AttrRef": _AttrRef, "_ItemRef": _ItemRef,
     "_STRING": {k: v[0] for k, v in builtins.STRING_MEMBERS.items()},
     "_STRING_SHARED": builtins.STRING_SHARED,
     "_delegate_named": _delegate_named,

@@ -165,9 +165,9 @@ class ProcCompiler(ExpressionCompiler):
         self.node = node
         self.emit(0, f"def {self.py}({', '.join(params)}):")
         self.emit(1, "if False: yield")
-        for var, t in zip(params[len(params) - len(proc.params):], proc.param_types):
-            if t.base in CONVERT and not t.rank:
-                self.emit(1, f"{var} = {CONVERT[t.base]}({var})")
+        for p, t in zip(proc.params, proc.param_types):
+            if t.base in CONVERT and not t.rank and not p.byref:
+                self.emit(1, f"a_{p.key} = {CONVERT[t.base]}(a_{p.key})")
         for var in self.locals.values():
             if var.kind == "local":
                 self.emit(1, f"{var.py} = {self.default(var.type)!r}")
@@ -208,10 +208,6 @@ class ProcCompiler(ExpressionCompiler):
     def return_code(self, value: str | None) -> str:
         proc = self.proc
         result = value if value is not None else ("_result" if proc.kind == "function" else "None")
-        byref = proc.byref_positions
-        if byref:
-            finals = ", ".join(f"a_{proc.params[i].key}" for i in byref)
-            return f"return ({result}, ({finals},))"
         return f"return {result}" if result != "None" else "return"
 
     # ------------------------------------------------------------ statements
@@ -300,17 +296,50 @@ class ProcCompiler(ExpressionCompiler):
             raise self.fail(INVALID_STATEMENT, "an expression is not a statement", s)
         self.emit(depth, code)
 
+    def capture(self, depth: int, compile_condition) -> tuple[str, list[str]]:
+        """Compile a condition; also return (and take out of the output) the
+        statements it needs first (a call with ByRef arguments, expressions.py),
+        so that a loop can run them before every test, not once."""
+        saved, self.depth = self.depth, depth
+        mark = len(self.lines)
+        code = compile_condition()
+        extra = self.lines[mark:]
+        del self.lines[mark:]
+        self.line_map = {k: v for k, v in self.line_map.items() if k <= mark}
+        self.depth = saved
+        indent = len("    " * depth)
+        return code, [line[indent:] for line in extra]
+
+    def emit_lines(self, depth: int, lines: list[str]) -> None:
+        for line in lines:
+            self.emit(depth, line)
+
     def s_If(self, s: ast.If, depth: int) -> None:
+        self.if_chain(s, s.branches, depth)
+
+    def if_chain(self, s: ast.If, branches: list, depth: int) -> None:
         keyword = "if"
-        for cond, body in s.branches:
+        for i, (cond, body) in enumerate(branches):
             self.node = s
-            self.emit(depth, f"{keyword} {self.condition(cond)}:")
+            code, first = self.capture(depth, lambda: self.condition(cond))
+            if first and keyword == "elif":  # ElseIf whose test needs statements: else + a nested If
+                self.emit(depth, "else:")
+                self.if_chain(s, branches[i:], depth + 1)
+                return
+            self.emit_lines(depth, first)
+            self.emit(depth, f"{keyword} {code}:")
             self.block(body, depth + 1)
             keyword = "elif"
         if s.orelse:
             self.node = s
             self.emit(depth, "else:")
             self.block(s.orelse, depth + 1)
+
+    def loop_test(self, depth: int, cond: ast.Expr, until: bool) -> None:
+        """`if <loop is over>: break` at the top or bottom of a loop body."""
+        code, first = self.capture(depth, lambda: self.condition(cond))
+        self.emit_lines(depth, first)
+        self.emit(depth, f"if {code if until else f'not {code}'}: break")
 
     def slice_check(self, depth: int) -> None:
         """Give the CPU back now and then, as the controller time-slices threads."""
@@ -368,7 +397,8 @@ class ProcCompiler(ExpressionCompiler):
         self.emit(depth + 1, "break")
 
     def s_While(self, s: ast.While, depth: int) -> None:
-        self.emit(depth, f"while {self.condition(s.condition)}:")
+        self.emit(depth, "while True:")
+        self.loop_test(depth + 1, s.condition, until=False)
 
         def body(d):
             self.loop_body(s, "while", s.body, d)
@@ -377,20 +407,17 @@ class ProcCompiler(ExpressionCompiler):
         self.with_exit_catch(s, depth + 1, body)
 
     def s_Do(self, s: ast.Do, depth: int) -> None:
+        self.emit(depth, "while True:")
         if s.pre is not None:
             kind, cond = s.pre
-            test = self.condition(cond)
-            self.emit(depth, f"while {test if kind == 'while' else f'not {test}'}:")
-        else:
-            self.emit(depth, "while True:")
+            self.loop_test(depth + 1, cond, until=kind == "until")
 
         def body(d):
             self.loop_body(s, "do", s.body, d)
             if s.post is not None:
                 self.node = s
                 kind, cond = s.post
-                test = self.condition(cond)
-                self.emit(d, f"if {f'not {test}' if kind == 'while' else test}: break")
+                self.loop_test(d, cond, until=kind == "until")
             self.slice_check(d)
 
         self.with_exit_catch(s, depth + 1, body)

@@ -99,6 +99,7 @@ class ProcSym:
 
     @property
     def byref_positions(self) -> list[int]:
+        """ByRef parameters receive a reference object (`.value`), see expressions.reference."""
         return [i for i, p in enumerate(self.params) if p.byref]
 
     @property
