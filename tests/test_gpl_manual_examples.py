@@ -61,9 +61,11 @@ Module M
     Sub Counter()
         Dim ii As Short
         Static jj As Short
+        Static kk As Integer = 10
         ii += 1
         jj += 1
-        Console.WriteLine(ii & " " & jj)
+        kk += 1
+        Console.WriteLine(ii & " " & jj & " " & kk)
     End Sub
     Public Sub Main()
         Counter()
@@ -72,7 +74,7 @@ Module M
     End Sub
 End Module
 """)
-    assert lines(out) == ["1 1", "1 2", "1 3"]
+    assert lines(out) == ["1 1 11", "1 2 12", "1 3 13"]
 
 
 def test_public_names_qualified_and_unqualified():

@@ -18,7 +18,7 @@ from .errors import DUPLICATE_SYMBOL, ILLEGAL_GOTO, INVALID_STATEMENT, TYPE_MISM
 from .expressions import ExpressionCompiler
 from .library import CLASSES
 from .scope import mangle
-from .symbols import BASIC, SType, VarSym
+from .symbols import SType, VarSym
 from .values import CONVERT, DEFAULTS
 
 SLICE_ITERATIONS = 1024  # loop iterations between time slices, as for V+ tasks
@@ -267,9 +267,12 @@ class ProcCompiler(ExpressionCompiler):
             var = self.locals[d.key]
             if var.kind == "static":
                 if d.init is not None or d.new or (d.bounds and any(b is not None for b in d.bounds)):
-                    self.globals_assigned.add(var.py)
-                    self.emit(depth, f"if {var.py} is None:" if var.type.rank or var.type.base not in BASIC
-                              else "if False:")
+                    # initialised the first time the Static statement runs, then kept
+                    done = f"{var.py}__set"
+                    self.project.statics[done] = False
+                    self.globals_assigned.update((var.py, done))
+                    self.emit(depth, f"if not {done}:")
+                    self.emit(depth + 1, f"{done} = True")
                     self.emit(depth + 1, f"{var.py} = {self.initial_value(var, d)}")
                 continue
             if d.init is None and not d.new and not (d.bounds and any(b is not None for b in d.bounds)):
