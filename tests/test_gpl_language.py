@@ -804,3 +804,53 @@ Module Locks
 End Module
 """)
     assert out == "1 0 1 2\n"
+
+
+def test_project_of_several_files_with_qualified_names(tmp_path):
+    """Ch. 17 "Modules" (L3230-3236): modules in several files; a Public
+    procedure or class of another module is used as module_name.item_name or,
+    when unambiguous, by its own name; without ProjectSource lines every .gpo,
+    then every .gpl file is loaded."""
+    (tmp_path / "Project.gpr").write_text('ProjectBegin\nProjectName="Multi"\nProjectStart="Cell.Run"\nProjectEnd\n')
+    (tmp_path / "Shapes.gpl").write_text("""
+Module Shapes
+    Public Class Part
+        Public size As Double
+        Public Shared made As Integer
+        Public Sub New(ByVal s As Double)
+            size = s
+            made += 1
+        End Sub
+    End Class
+    Public Function Area(ByVal p As Part) As Double
+        Return p.size * p.size
+    End Function
+    Private Sub Hidden()
+    End Sub
+End Module
+""")
+    (tmp_path / "Cell.gpl").write_text("""
+Module Cell
+    Public Sub Run()
+        Dim a As Shapes.Part = New Shapes.Part(3)
+        Dim b As New Part(4)
+        Console.WriteLine(Shapes.Area(a) + Area(b) & " " & Shapes.Part.made)
+    End Sub
+End Module
+""")
+    from gpl_helpers import Clock, NoRobot
+    from twin.controller.io import DigitalIO
+    from twin.controller.scheduler import Scheduler
+    from twin.language.vplus.runtime import Console
+
+    scheduler = Scheduler()
+    system = GplSystem(NoRobot(), DigitalIO(), Clock(), scheduler, Console(echo=None))
+    system.load_project(tmp_path)
+    thread = system.start()
+    while scheduler.alive:
+        scheduler.run_cycle()
+    assert thread.error is None and system.console.output == "25 2\n"
+    (tmp_path / "Cell.gpl").write_text("Module Cell\n    Public Sub Run()\n        Shapes.Hidden()\n    End Sub\nEnd Module\n")
+    with pytest.raises(ProgramError) as err:
+        GplSystem(NoRobot(), DigitalIO(), Clock(), Scheduler(), Console(echo=None)).load_project(tmp_path)
+    assert err.value.code == -2008 and err.value.file.endswith("Cell.gpl") and err.value.line == 3
