@@ -854,3 +854,31 @@ End Module
     with pytest.raises(ProgramError) as err:
         GplSystem(NoRobot(), DigitalIO(), Clock(), Scheduler(), Console(echo=None)).load_project(tmp_path)
     assert err.value.code == -2008 and err.value.file.endswith("Cell.gpl") and err.value.line == 3
+
+
+def test_catch_as_exception_and_nested_declaration_error():
+    """VB.NET's `Catch e As Exception` declares e (twin accepts it); a Dim
+    nested in a block is an error wherever it is (ch. 4, L712)."""
+    out = output_of("""
+Sub Main()
+    Dim x As Integer
+    Try
+        x = 1 \\ 0
+    Catch e As Exception
+        Console.WriteLine(e.ErrorCode)
+    End Try
+End Sub
+""")
+    assert out == "-702\n"
+    with pytest.raises(ProgramError) as err:
+        output_of("""
+Sub Main()
+    Dim i As Integer
+    For i = 1 To 2
+        If i = 2 Then
+            Dim late As Integer
+        End If
+    Next
+End Sub
+""")
+    assert err.value.code == -2006 and err.value.line == 6

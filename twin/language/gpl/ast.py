@@ -228,6 +228,7 @@ class Try(Statement):
     catch_var: str | None
     catch_body: list[Statement] | None
     finally_body: list[Statement] | None
+    catch_type: TypeRef | None = None  # VB.NET's `Catch e As Exception` declares e
 
 
 # ----------------------------------------------------------------- members

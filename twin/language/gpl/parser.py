@@ -287,7 +287,8 @@ class _ToAst(Transformer):
         return ast.Select(subject=subject, cases=cases, default=default, **_pos(meta))
 
     def catch_part(self, meta, c):
-        return ("catch", str(c[0]) if c[0] is not None else None, _body(c[1]))
+        name, type_ref, body = c
+        return ("catch", str(name) if name is not None else None, _body(body), type_ref)
 
     def finally_part(self, meta, c):
         return ("finally", _body(c[0]))
@@ -298,6 +299,7 @@ class _ToAst(Transformer):
             body=_body(body),
             catch_var=catch[1] if catch else None,
             catch_body=catch[2] if catch else None,
+            catch_type=catch[3] if catch else None,
             finally_body=fin[1] if fin else None,
             **_pos(meta),
         )

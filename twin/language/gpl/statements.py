@@ -185,12 +185,14 @@ class ProcCompiler(ExpressionCompiler):
         for s in body:
             if isinstance(s, ast.Declare):
                 self.declare_locals(s)
-            else:
-                for inner in _nested_bodies(s):
-                    if any(isinstance(x, ast.Declare) for x in inner):
-                        bad = next(x for x in inner if isinstance(x, ast.Declare))
-                        raise self.fail(INVALID_STATEMENT, "variables can only be declared in the outermost "
-                                        "level of a procedure (ch. 4)", bad)
+        top = {id(s) for s in body}
+        for s in _walk(body):
+            if isinstance(s, ast.Declare) and id(s) not in top:
+                raise self.fail(INVALID_STATEMENT, "variables can only be declared in the outermost "
+                                "level of a procedure (ch. 4)", s)
+            if isinstance(s, ast.Try) and s.catch_type is not None and s.catch_var.lower() not in self.locals:
+                t = self.resolve_type(s.catch_type, s)
+                self.locals[s.catch_var.lower()] = VarSym(s.catch_var, t, "local", f"l_{s.catch_var.lower()}")
 
     def declare_locals(self, s: ast.Declare) -> None:
         for d in s.items:
