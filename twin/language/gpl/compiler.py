@@ -83,7 +83,7 @@ class ProjectCompiler:
         for sym in self.module_order:
             init_units.append(self.compile_module_init(sym))
             init = sym.procs.get("init")
-            if init is not None:
+            if init is not None and init.kind == "sub" and not init.params:  # ch. 10 "Special Initialization"
                 init_subs.append(init.py)
         for cls in self.classes:
             self.compile_class_init(cls)
