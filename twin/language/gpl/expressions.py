@@ -393,7 +393,7 @@ class ExpressionCompiler(Scope):
             self.check_delegate_signature(dsym, proc, e)
         if proc.instance and me == "None":
             raise self.fail(INVALID_STATEMENT, f"AddressOf {proc.name} needs an object", e)
-        return f"_Delegate({proc.py}, {me if proc.instance else 'None'}, {proc.qualified!r})"
+        return f"_Delegate({proc.py}, {me if proc.instance else 'None'}, {proc.qualified!r}, {len(proc.params)})"
 
     def check_delegate_signature(self, dsym: DelegateSym, proc: ProcSym, node) -> None:
         """The procedure must match the Delegate statement exactly (ch. 10)."""

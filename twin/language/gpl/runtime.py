@@ -73,10 +73,11 @@ SLICE = _Slice()
 class Delegate:
     """A Delegate object: a procedure and, for a class method, its object."""
 
-    def __init__(self, fn: Callable, me: Any, name: str):
+    def __init__(self, fn: Callable, me: Any, name: str, params: int):
         self.fn = fn
         self.me = me
         self.name = name
+        self.params = params  # how many arguments the procedure takes
 
     def run(self, rt, args: tuple):
         return (yield from (self.fn(rt, self.me, *args) if self.me is not None else self.fn(rt, *args)))
@@ -421,6 +422,8 @@ class GplSystem:
 
     def start_thread(self, target, name: str = "") -> "GplThread":
         if isinstance(target, Delegate):
+            if target.params:
+                raise fail(INVALID_ARGUMENT, f"thread procedure {target.name} must have no parameters")
             fn, me, label = target.fn, target.me, target.name
             steps = [(lambda rt: fn(rt, me)) if me is not None else fn]
         else:
@@ -538,7 +541,7 @@ def _delegate_named(rt, name, kind: str, params: int) -> Delegate:
     proc = rt.system.find_procedure(values._cstr(name))
     if proc.kind != kind or len(proc.params) != params or proc.instance:
         raise fail(TYPE_MISMATCH, f"{proc.name} does not match the Delegate")
-    return Delegate(rt.system.namespace[proc.py], None, proc.qualified)
+    return Delegate(rt.system.namespace[proc.py], None, proc.qualified, len(proc.params))
 
 
 # The names generated code sees, besides L_<class> and the project's own.
