@@ -662,7 +662,7 @@ class ExpressionCompiler(Scope):
     def class_member(self, cls: ClassSym, key: str, node):
         sym = cls.member(key)
         if sym is None:
-            raise self.fail(UNDEFINED_SYMBOL, f"{cls.name}.{key}", node)
+            raise self.fail(UNDEFINED_SYMBOL, f"{cls.name}.{getattr(node, 'name', key)}", node)
         if not is_public(sym) and not self.inside(cls):
             raise self.fail(PRIVATE_SYMBOL, f"{cls.name}.{sym.name}", node)
         return sym
@@ -676,7 +676,7 @@ class ExpressionCompiler(Scope):
     def library_attr(self, cls: type, key: str, node) -> str:
         attr = library_member(cls, key)
         if attr is None:
-            raise self.fail(UNDEFINED_SYMBOL, f"{cls.gpl_name}.{key}", node)
+            raise self.fail(UNDEFINED_SYMBOL, f"{cls.gpl_name}.{getattr(node, 'name', key)}", node)
         return attr
 
     def library_call(self, owner_code: str, cls: type, key: str, args, codes, func, shared: bool):

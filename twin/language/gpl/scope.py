@@ -113,7 +113,7 @@ class Scope:
         if isinstance(owner, (ModuleSym, ClassSym)):
             found = owner.member(key)
             if found is None:
-                raise self.fail(UNDEFINED_SYMBOL, f"{owner.name}.{key}", node)
+                raise self.fail(UNDEFINED_SYMBOL, f"{owner.name}.{getattr(node, 'name', key)}", node)
             if not is_public(found) and not self.inside(owner):
                 raise self.fail(PRIVATE_SYMBOL, f"{owner.name}.{found.name}", node)
             return found
