@@ -882,3 +882,29 @@ Sub Main()
 End Sub
 """)
     assert err.value.code == -2006 and err.value.line == 6
+
+
+def test_short_circuit_with_byref_calls():
+    """Table 6-1: AndAlso/OrElse stop once the left side decides, also when the
+    right side is a call with a ByRef argument (which needs statements first)."""
+    out = output_of("""
+Module M
+    Public calls As Integer
+    Function Check(ByRef x As Integer) As Boolean
+        calls += 1
+        x += 1
+        Return x > 2
+    End Function
+    Public Sub Main()
+        Dim v, i As Integer
+        For i = 1 To 4
+            If i > 2 AndAlso Check(v) Then Console.WriteLine("yes " & i)
+        Next
+        While v < 5 OrElse Not Check(v)
+            v += 1
+        End While
+        Console.WriteLine(calls & " " & v)
+    End Sub
+End Module
+""")
+    assert out == "3 6\n"

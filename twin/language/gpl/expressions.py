@@ -425,8 +425,22 @@ class ExpressionCompiler(Scope):
         op = e.op
         if op in ("andalso", "orelse"):
             a = self.condition(e.left)
+            mark = len(self.lines)
             b = self.condition(e.right)
-            return f"({a} {'and' if op == 'andalso' else 'or'} {b})", SType("boolean")
+            if len(self.lines) == mark:
+                return f"({a} {'and' if op == 'andalso' else 'or'} {b})", SType("boolean")
+            # The right side needed statements first (a ByRef call): run them only
+            # when the left side does not decide (short-circuit, Table 6-1).
+            first = self.lines[mark:]
+            del self.lines[mark:]
+            self.line_map = {k: v for k, v in self.line_map.items() if k <= mark}
+            temp = self.fresh("sc")
+            self.emit(self.depth, f"{temp} = {a}")
+            self.emit(self.depth, f"if {'' if op == 'andalso' else 'not '}{temp}:")
+            for line in first:
+                self.emit(self.depth + 1, line[len("    " * self.depth):])
+            self.emit(self.depth + 1, f"{temp} = {b}")
+            return temp, SType("boolean")
         a, at = self.expr(e.left)
         b, bt = self.expr(e.right)
         nums = at is not None and bt is not None and at.is_number and bt.is_number
