@@ -67,9 +67,6 @@ def _body(tree_or_list) -> list[ast.Statement]:
     return tree_or_list if isinstance(tree_or_list, list) else []
 
 
-_OPS = {"\\": "\\"}
-
-
 @v_args(meta=True)
 class _ToAst(Transformer):
     # ---- literals and names

@@ -17,7 +17,6 @@ import struct
 from .errors import DIVIDE_BY_ZERO, INVALID_NUMBER, OVERFLOW, SUBSCRIPT_RANGE, TYPE_MISMATCH, fail
 
 INTEGER_RANGES = {"integer": (-(2**31), 2**31 - 1), "short": (-32768, 32767), "byte": (0, 255)}
-NUMERIC = ("integer", "short", "byte", "single", "double", "boolean")
 
 
 class GplArray:
