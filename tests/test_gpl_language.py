@@ -908,3 +908,16 @@ Module M
 End Module
 """)
     assert out == "3 6\n"
+
+
+def test_built_in_member_argument_count_is_checked_when_compiling():
+    """A call of a built-in member with the wrong number of arguments is a
+    compile error at its line (not a Python error at run time)."""
+    with pytest.raises(ProgramError) as err:
+        output_of("""
+Sub Main()
+    Dim x As Integer = 3
+    Console.WriteLine("Value: {0}", x)
+End Sub
+""")
+    assert err.value.code == -2005 and err.value.line == 4 and "Console.WriteLine" in err.value.message

@@ -64,6 +64,14 @@ def library_byref(cls: type, attr: str) -> frozenset:
     return getattr(_library_function(cls, attr), "gpl_byref", frozenset())
 
 
+def library_arity(cls: type, attr: str) -> tuple[int, int]:
+    """How many GPL arguments a built-in method takes (not counting self / rt)."""
+    params = list(inspect.signature(_library_function(cls, attr)).parameters.values())[1:]
+    if any(p.kind is p.VAR_POSITIONAL for p in params):
+        return sum(p.default is p.empty and p.kind is p.POSITIONAL_OR_KEYWORD for p in params), 99
+    return sum(p.default is p.empty for p in params), len(params)
+
+
 def waiting_library_names() -> set[str]:
     names = set()
     for cls in CLASSES.values():
@@ -152,14 +160,14 @@ class ExpressionCompiler(Scope):
             raise self.fail(UNDEFINED_SYMBOL if sym is None else INVALID_STATEMENT, target.name, target)
         if isinstance(target, ast.Call):
             func = target.func
+            if isinstance(func, ast.Member):  # obj.arr(i) = v, obj.Prop(i) = v
+                self.store_member(func, target.args, code, vt, depth)
+                return
             fcode, ft = self.expr_or_ns(func)
             if ft is not None and ft.is_array:
                 if len(target.args) != ft.rank:
                     raise self.fail(INVALID_STATEMENT, f"{len(target.args)} indices for a rank {ft.rank} array")
                 self.emit(depth, f"{fcode}[{self.indices(target.args)}] = {self.convert(code, vt, ft.element)}")
-                return
-            if isinstance(func, ast.Member):
-                self.store_member(func, target.args, code, vt, depth)
                 return
             if ft is None:
                 args = ", ".join(self.expr(a)[0] for a in target.args)
@@ -702,6 +710,11 @@ class ExpressionCompiler(Scope):
             if args:
                 raise self.fail(TYPE_MISMATCH, f"{cls.gpl_name}.{func.name} takes no arguments", func)
             return f"{owner_code}.{attr}", None
+        low, high = library_arity(cls, attr)
+        if not low <= len(args) <= high:
+            expected = str(low) if low == high else f"{low} to {high}" if high < 99 else f"at least {low}"
+            raise self.fail(WRONG_ARGUMENT_COUNT,
+                            f"{cls.gpl_name}.{func.name} takes {expected} argument(s), {len(args)} given", func)
         byref = library_byref(cls, attr)
         call_codes = list(codes)
         refs = []
