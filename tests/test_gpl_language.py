@@ -857,8 +857,9 @@ End Module
 
 
 def test_catch_as_exception_and_nested_declaration_error():
-    """VB.NET's `Catch e As Exception` declares e (twin accepts it); a Dim
-    nested in a block is an error wherever it is (ch. 4, L712)."""
+    """VB.NET's `Catch e As Exception` and `For k As Integer` declare e and k
+    (twin accepts them); a Dim nested in a block is an error wherever it is
+    (ch. 4, L712)."""
     out = output_of("""
 Sub Main()
     Dim x As Integer
@@ -867,9 +868,13 @@ Sub Main()
     Catch e As Exception
         Console.WriteLine(e.ErrorCode)
     End Try
+    For k As Integer = 1 To 3
+        x += k
+    Next
+    Console.WriteLine(x)
 End Sub
 """)
-    assert out == "-702\n"
+    assert out == "-702\n6\n"
     with pytest.raises(ProgramError) as err:
         output_of("""
 Sub Main()

@@ -192,6 +192,7 @@ class For(Statement):
     stop: Expr
     step: Expr | None
     body: list[Statement]
+    var_type: TypeRef | None = None  # VB.NET's `For i As Integer = ...` declares i
 
 
 @dataclass

@@ -244,8 +244,9 @@ class _ToAst(Transformer):
         return ast.If(branches=branches, orelse=orelse, **_pos(meta))
 
     def for_block(self, meta, c):
-        var, start, stop, step, body = c[0], c[2], c[3], c[4], c[5]
-        return ast.For(var=var, start=start, stop=stop, step=step, body=_body(body), **_pos(meta))
+        var, var_type, start, stop, step, body = c[0], c[1], c[3], c[4], c[5], c[6]
+        return ast.For(var=var, start=start, stop=stop, step=step, body=_body(body), var_type=var_type,
+                       **_pos(meta))
 
     def while_block(self, meta, c):
         return ast.While(condition=c[1], body=_body(c[2]), **_pos(meta))

@@ -190,9 +190,15 @@ class ProcCompiler(ExpressionCompiler):
             if isinstance(s, ast.Declare) and id(s) not in top:
                 raise self.fail(INVALID_STATEMENT, "variables can only be declared in the outermost "
                                 "level of a procedure (ch. 4)", s)
-            if isinstance(s, ast.Try) and s.catch_type is not None and s.catch_var.lower() not in self.locals:
-                t = self.resolve_type(s.catch_type, s)
-                self.locals[s.catch_var.lower()] = VarSym(s.catch_var, t, "local", f"l_{s.catch_var.lower()}")
+            if isinstance(s, ast.Try) and s.catch_type is not None:
+                self.declare_implicit(s.catch_var, s.catch_type, s)
+            if isinstance(s, ast.For) and s.var_type is not None and isinstance(s.var, ast.Name):
+                self.declare_implicit(s.var.name, s.var_type, s)
+
+    def declare_implicit(self, name: str, type_ref: ast.TypeRef, node) -> None:
+        """A local declared by `Catch e As Exception` or `For i As Integer`."""
+        if name.lower() not in self.locals:
+            self.locals[name.lower()] = VarSym(name, self.resolve_type(type_ref, node), "local", f"l_{name.lower()}")
 
     def declare_locals(self, s: ast.Declare) -> None:
         for d in s.items:
