@@ -926,3 +926,21 @@ Sub Main()
 End Sub
 """)
     assert err.value.code == -2005 and err.value.line == 4 and "Console.WriteLine" in err.value.message
+
+
+def test_single_shows_seven_digits_and_object_types_are_checked():
+    """Table 4-1: a Single is a 32-bit float (shown with its 7 digits by CStr,
+    as VB does); Nothing in a String is ""; assigning an object of another
+    class is a compile error (ch. 5 "Limitations": explicit classes)."""
+    out = output_of("""
+Sub Main()
+    Dim a As Single = 0.1
+    Dim d As Double = 0.1
+    Dim s As String = Nothing
+    Console.WriteLine(CStr(a) & " " & d & " [" & s & "] " & (a = d))
+End Sub
+""")
+    assert out == "0.1 0.1 [] False\n"
+    with pytest.raises(ProgramError) as err:
+        output_of("Sub Main()\n    Dim l As Location\n    Dim p As New Profile\n    l = p\nEnd Sub\n")
+    assert err.value.code == -2004 and err.value.line == 4

@@ -253,10 +253,11 @@ class ExpressionCompiler(Scope):
                 return code
             if base == "double" and vt is not None and vt.is_number and vt.base != "single":
                 return code if vt.base == "double" else f"float({code})"
-            if vt is not None and vt.base in ("user", "lib", "delegate", "nothing") and not vt.rank:
+            if vt is not None and vt.base in ("user", "lib", "delegate") and not vt.rank:
                 raise self.fail(TYPE_MISMATCH, f"{vt} assigned to a {target}")
             return f"{CONVERT[base]}({code})"
-        if vt is not None and vt.base in BASIC and not vt.rank:
+        if vt is not None and not vt.rank and (vt.base in BASIC or (
+                vt.base in ("user", "lib", "delegate") and (vt.base, vt.ref) != (base, target.ref))):
             raise self.fail(TYPE_MISMATCH, f"{vt} assigned to a {target}")
         return code
 

@@ -188,6 +188,10 @@ def format_value(v) -> str:
         if v.is_integer() and abs(v) < 1e15:
             return str(int(v))
         text = f"{v:.15G}"
+        if _csng_exact(v):  # a Single's value: 7 digits, as VB shows a Single (0.1, not 0.100000001490116)
+            short = f"{v:.7G}"
+            if struct.unpack("f", struct.pack("f", float(short)))[0] == v:
+                text = short
         if "E" in text:
             mantissa, exponent = text.split("E")
             sign = exponent[0]
@@ -197,6 +201,13 @@ def format_value(v) -> str:
     if v is None:
         return ""
     raise fail(TYPE_MISMATCH, f"{getattr(type(v), 'gpl_name', type(v).__name__)} used as a String")
+
+
+def _csng_exact(v: float) -> bool:
+    try:
+        return struct.unpack("f", struct.pack("f", v))[0] == v
+    except OverflowError:
+        return False
 
 
 CONVERT = {
