@@ -547,7 +547,7 @@ def _delegate_named(rt, name, kind: str, params: int) -> Delegate:
 # The names generated code sees, besides L_<class> and the project's own.
 _NAMESPACE = {
     "GplArray": values.GplArray,
-    "_Jump": _Jump, "_Break": _Break, "_ExitTry": _ExitTry, "_CONTROL": _Control,
+    "_Jump": _Jump, "_Break": _Break, "_ExitTry": _ExitTry,
     "_Delegate": Delegate, "_invoke": _invoke, "_w": _w, "_callm": _callm, "_setm": _setm,
     "_setattr": _setattr, "_call": _call, "_setindex": _setindex, "_redim": _redim,
     "_case_value": _case_value, "_object": _object, "_catch": _catch, "_throw": _throw, "_rethrow": _rethrow, "_Ref": Ref, "_GlobalRef": _GlobalRef, "_AttrRef": _AttrRef, "_ItemRef": _ItemRef,

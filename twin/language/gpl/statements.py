@@ -511,8 +511,7 @@ class ProcCompiler(ExpressionCompiler):
             self.emit(inner, "try:")
             self.block(s.body, inner + 1, dispatch_var=pc, boundary=True)
             self.node = s
-            self.emit(inner, "except _CONTROL: raise")
-            self.emit(inner, "except Exception as _e:")
+            self.emit(inner, "except Exception as _e:  # not the _Control jumps (BaseException)")
             if catch_var is not None:
                 self.assign_var(catch_var, "_catch(rt, _e)", inner + 1)
             else:
