@@ -944,3 +944,15 @@ End Sub
     with pytest.raises(ProgramError) as err:
         output_of("Sub Main()\n    Dim l As Location\n    Dim p As New Profile\n    l = p\nEnd Sub\n")
     assert err.value.code == -2004 and err.value.line == 4
+
+
+def test_wrong_arguments_to_a_member_found_at_run_time():
+    """A member the compiler could not resolve (the result of a built-in method)
+    called with the wrong number of arguments stops with a GPL error, located."""
+    error = error_of("""
+Sub Main()
+    Dim loc As New Location
+    Console.WriteLine(loc.Inverse.Mul())
+End Sub
+""")
+    assert (error.code, error.line) == (-2005, 4) and "Location.Mul" in error.message

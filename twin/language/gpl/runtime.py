@@ -22,9 +22,11 @@ from ...errors import ProgramError
 from ..vplus.runtime import Console
 from . import builtins, values
 from .compiler import CompiledProject, ProjectCompiler
+from .expressions import library_arity
 from .errors import (
     DIVIDE_BY_ZERO, INVALID_ARGUMENT, INVALID_STATEMENT, ME_UNDEFINED, NO_START_PROCEDURE, NULL_OBJECT,
-    OVERFLOW, STACK_OVERFLOW, TYPE_MISMATCH, UNDEFINED_PROCEDURE, UNDEFINED_SYMBOL, GplError, fail, message,
+    OVERFLOW, STACK_OVERFLOW, TYPE_MISMATCH, UNDEFINED_PROCEDURE, UNDEFINED_SYMBOL, WRONG_ARGUMENT_COUNT,
+    GplError, fail, message,
 )
 from .library import CLASSES, Ref, member as library_member
 from .parser import parse, parse_file
@@ -195,6 +197,10 @@ def _callm(rt, obj, key: str, args: tuple | None):
     if isinstance(raw, property):
         value = getattr(obj, attr)
         return value[args if len(args) > 1 else args[0]] if args else value
+    low, high = library_arity(type(obj), attr)
+    if not low <= len(args or ()) <= high:
+        raise fail(WRONG_ARGUMENT_COUNT, f"{type(obj).gpl_name}.{attr} takes {low}"
+                   + (f" to {high}" if high != low and high < 99 else "") + f" argument(s), {len(args or ())} given")
     if getattr(raw, "gpl_shared", False):
         return getattr(obj, attr)(rt, *(args or ()))
     return getattr(obj, attr)(*(args or ()))
@@ -292,9 +298,11 @@ def as_gpl_error(err: BaseException) -> GplError | None:
 
 
 def _raised_in_program(err: BaseException) -> bool:
+    """Raised by generated code, the value operations or the run-time member
+    lookup (a call with the wrong arguments fails there), not inside a library."""
     frames = traceback.extract_tb(err.__traceback__)
     return bool(frames) and (frames[-1].filename.startswith("<gpl:") or
-                             frames[-1].filename == values.__file__)
+                             frames[-1].filename in (values.__file__, __file__))
 
 
 def _catch(rt, err: BaseException):
