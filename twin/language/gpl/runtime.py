@@ -187,6 +187,9 @@ def _callm(rt, obj, key: str, args: tuple | None):
             value = rt.system.namespace[entry[1]]
             return value[args if len(args) > 1 else args[0]] if args else value
         if kind == "method":
+            if len(args or ()) != entry[4]:
+                raise fail(WRONG_ARGUMENT_COUNT, f"{type(obj).gpl_name}.{key} takes {entry[4]} argument(s), "
+                           f"{len(args or ())} given")
             args = tuple(Ref(a) if i in entry[3] else a for i, a in enumerate(args or ()))
             return entry[1](rt, obj, *args) if entry[2] else entry[1](rt, *args)
         if kind == "property":
@@ -400,7 +403,7 @@ class GplSystem:
             convert = ns.get(values.CONVERT.get(var.type.base, ""), lambda v: v) if not var.type.rank else (lambda v: v)
             table[key] = ("field" if var.kind == "field" else "shared", var.py, convert)
         for key, proc in cls.methods.items():
-            table[key] = ("method", ns[proc.py], proc.instance, frozenset(proc.byref_positions))
+            table[key] = ("method", ns[proc.py], proc.instance, frozenset(proc.byref_positions), len(proc.params))
         for key, prop in cls.properties.items():
             table[key] = ("property", ns.get(prop.getter_py), ns.get(prop.setter_py), not prop.shared)
         return table
