@@ -601,8 +601,8 @@ class ProcCompiler(ExpressionCompiler):
         for i in range(len(self.loops) - 1, -1, -1):
             loop = self.loops[i]
             if loop.kind == s.kind:
-                if any(l.kind == "dispatch" for l in self.loops[i + 1:]):
-                    raise self.fail(UNSUPPORTED, "Continue from a block with labels", s)
+                if any(l.kind in ("dispatch", "select") for l in self.loops[i + 1:]):
+                    raise self.fail(UNSUPPORTED, "Continue from a block with labels or an Exit Select", s)
                 if loop.step is not None:
                     var, step = loop.step
                     code, _ = self.expr(var)
