@@ -58,8 +58,8 @@ def _start_vplus(sim: Simulation, program: Path, main: str | None, console: Cons
 def _start_gpl(sim: Simulation, project: Path, main: str | None, console: Console | None,
                output: str | Path | None) -> GplSystem:
     """A GPL project folder: Project.gpr names the files and the start procedure
-    (`main` overrides it).  File I/O (/flash, /ROMDISK ...) goes to a fresh
-    folder beside the report, or a temporary one."""
+    (`main` overrides it).  File I/O (/flash, /ROMDISK ...) goes to the folder
+    `<project>-files` beside the report or recording, else to a temporary one."""
     if output is not None:
         sandbox = Path(output).resolve().parent / f"{project.name}-files"
         sandbox.mkdir(parents=True, exist_ok=True)
