@@ -1,6 +1,6 @@
 """The `twin` command: run a robot program on a cell, check a report.
 
-    twin run PROGRAM [--scene SCENE] [--main NAME] [--report R.json] [--rrd R.rrd]
+    twin run PROGRAM|PROJECT_DIR [--scene SCENE] [--main NAME] [--report R.json] [--rrd R.rrd]
                      [--max-sim-time S] [--seed N]
     twin check REPORT --expect EXPECT.toml [--junit FILE.xml]
 
@@ -32,8 +32,13 @@ def _run(args: argparse.Namespace) -> int:
         return 2 if err.code is None else 1
     for error in result.report.errors:
         where = f"{error['file']}:{error['line']}: " if error.get("file") else ""
+        if error.get("file") and error.get("column") and not error.get("step"):  # GPL: no steps, a column
+            where = f"{error['file']}:{error['line']}:{error['column']}: "
         step = f" at {error['program']} step {error['step']}" if error.get("step") else ""
-        print(f"{where}{error['message']}{step}", file=sys.stderr)
+        if not error.get("step") and error.get("program"):
+            step = f" in {error['program']}"
+        code = f" ({error['code']})" if error.get("code") is not None and not error.get("step") else ""
+        print(f"{where}{error['message']}{code}{step}", file=sys.stderr)
     report = result.report
     rate = report.sim_time_s / report.wall_time_s if report.wall_time_s > 0 else float("inf")
     regions = ", ".join(f"{name} {count}" for name, count in report.regions.items() if count)
@@ -60,10 +65,11 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="twin", description="Run robot programs on a digital twin of the cell.")
     sub = parser.add_subparsers(dest="command", required=True)
 
-    run = sub.add_parser("run", help="run a V+ program on a cell")
-    run.add_argument("program", help="V+ program file (.pg, .v2)")
+    run = sub.add_parser("run", help="run a V+ program or a GPL project on a cell")
+    run.add_argument("program", help="V+ program file (.pg, .v2) or GPL project folder (with Project.gpr)")
     run.add_argument("--scene", default=None, help="cell description (default: scenes/scara_pick.toml)")
-    run.add_argument("--main", default=None, help="program to execute (default: the first .PROGRAM)")
+    run.add_argument("--main", default=None, help="program to execute (default: the first .PROGRAM; "
+                     "GPL: the start procedure of Project.gpr)")
     run.add_argument("--report", default=None, help="write the placement report (JSON) here")
     run.add_argument("--rrd", default=None, help="write a Rerun recording here")
     run.add_argument("--max-sim-time", type=float, default=3600.0, help="stop after this many simulated seconds")

@@ -10,10 +10,12 @@ Python or a notebook:
 
 from __future__ import annotations
 
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 from .errors import ProgramError
+from .language.gpl.runtime import GplSystem
 from .language.vplus.runtime import Console, VPlusSystem
 from .report import Report
 from .simulation import DEFAULT_SCENE, Simulation
@@ -42,6 +44,34 @@ def _open_recorder(sim: Simulation, rrd_path: str | Path | None):
     return Recorder(sim.cell.model, rrd_path)
 
 
+def _start_vplus(sim: Simulation, program: Path, main: str | None, console: Console | None) -> VPlusSystem:
+    system = VPlusSystem(sim.controller, sim.io, sim.clock, console=console, seed=sim.cell.seed)
+    for name, location in sim.taught_locations().items():
+        system.define_location(name, location)
+    names = system.load(program)
+    if not names:
+        raise ProgramError(f"{program}: no .PROGRAM in file", file=str(program))
+    sim.scheduler.add(system.start(main or names[0]))
+    return system
+
+
+def _start_gpl(sim: Simulation, project: Path, main: str | None, console: Console | None,
+               output: str | Path | None) -> GplSystem:
+    """A GPL project folder: Project.gpr names the files and the start procedure
+    (`main` overrides it).  File I/O (/flash, /ROMDISK ...) goes to the folder
+    `<project>-files` beside the report or recording, else to a temporary one."""
+    if output is not None:
+        sandbox = Path(output).resolve().parent / f"{project.name}-files"
+        sandbox.mkdir(parents=True, exist_ok=True)
+    else:
+        sandbox = Path(tempfile.mkdtemp(prefix="twin-gpl-"))
+    system = GplSystem(sim.controller, sim.io, sim.clock, sim.scheduler, console=console, sandbox=sandbox,
+                       seed=sim.cell.seed)
+    system.load_project(project)
+    system.start(main)
+    return system
+
+
 def run_program(
     program: str | Path,
     scene: str | Path | None = None,
@@ -52,10 +82,9 @@ def run_program(
     seed: int | None = None,
     console: Console | None = None,
 ) -> RunResult:
-    """Load the cell, load and start the program, simulate, report."""
+    """Load the cell, load and start the program (a V+ file or a GPL project
+    folder), simulate, report."""
     program = Path(program)
-    if program.is_dir():
-        raise ProgramError(f"{program}: GPL projects are not supported yet", file=str(program))
     if not program.exists():
         raise ProgramError(f"*Nonexistent file* {program}", file=str(program))
     scene = Path(scene) if scene is not None else DEFAULT_SCENE
@@ -64,14 +93,10 @@ def run_program(
 
     sim = Simulation(scene, seed=seed)
     sim.recorder = _open_recorder(sim, rrd_path)
-    system = VPlusSystem(sim.controller, sim.io, sim.clock, console=console, seed=sim.cell.seed)
-    for name, location in sim.taught_locations().items():
-        system.define_location(name, location)
-    names = system.load(program)
-    if not names:
-        raise ProgramError(f"{program}: no .PROGRAM in file", file=str(program))
-    task = system.start(main or names[0])
-    sim.scheduler.add(task)
+    if program.is_dir():
+        system = _start_gpl(sim, program, main, console, rrd_path or report_path)
+    else:
+        system = _start_vplus(sim, program, main, console)
 
     if sim.recorder is not None:
         sim.recorder.log_text(0.0, f"twin run {program} on {scene}")

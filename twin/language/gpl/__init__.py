@@ -1,0 +1,1 @@
+"""Brooks GPL (Guidance Programming Language) front end and interpreter."""

@@ -1,0 +1,76 @@
+"""Error codes the GPL library raises, with their messages.
+
+The GPL User Manual gives only -153, -323, -799 and -801 (digest §7).  The
+codes marked "PreciseFlex" are the controller's as we remember its error list
+(not in the seeds, unverified); the ones marked "twin" are twin-defined, in the
+controller's style, most of them from -3100 down.  docs/gpl.md lists them all.
+"""
+
+from __future__ import annotations
+
+from ....controller.controller import NULLING_TIMEOUT as VPLUS_NULLING_TIMEOUT
+from ....controller.kinematics import JOINT_LIMIT, LOCATION_OUT_OF_RANGE as VPLUS_OUT_OF_RANGE
+from ....controller.kinematics import STRAIGHT_LINE_CONFIG
+from ..errors import GplError
+from . import shared
+
+# (code, message)
+DEVICE_FULL = (-323, "Device full")  # manual L2992
+XML_ERROR = (-799, "XML error")  # manual L3725
+NO_XML_NODE = (-801, "No XML node")  # manual L3731
+INVALID_ROBOT = (-1000, "Invalid robot number")  # PreciseFlex
+ROBOT_ALREADY_ATTACHED = (-1006, "Robot already attached")  # PreciseFlex
+NO_ROBOT_ATTACHED = (-1009, "No robot attached")  # PreciseFlex
+JOINT_OUT_OF_RANGE = (-1012, "Joint out-of-range")  # PreciseFlex
+NULLING_TIMEOUT = (-1014, "Time out during nulling")  # PreciseFlex
+POWER_OFF = (-1600, "Power not enabled")  # twin wording
+NOT_HOMED = (-1027, "Robot not homed")  # twin
+LOCATION_OUT_OF_RANGE = (-1025, "Location out of range")  # twin
+STRAIGHT_CONFIG = (-1026, "Straight-line motion can't alter configuration")  # twin
+WRONG_LOCATION_TYPE = (-3100, "Invalid Location type for this member")  # twin
+NOTHING_ARGUMENT = (-705, "Object is Nothing")  # twin, the interpreter's code (gpl/errors.py)
+INVALID_ARGUMENT = (-706, "Invalid argument")  # twin, the interpreter's code (gpl/errors.py)
+NOT_SUPPORTED = (-3103, "Not supported by the twin")  # twin
+FRAME_LOOP = (-3104, "Reference frames form a loop")  # twin
+INVALID_SIGNAL = (-3105, "Invalid signal number")  # twin
+FILE_NOT_FOUND = (-3110, "File not found")  # twin
+INVALID_PATH = (-3111, "Invalid file path")  # twin
+FILE_CLOSED = (-3112, "File is closed")  # twin
+SOCKET_ERROR = (-3120, "Socket error")  # twin
+SOCKET_TIMEOUT = (-3121, "Socket timeout")  # twin
+MODBUS_EXCEPTION = (-3130, "Modbus exception response")  # twin
+MODBUS_TIMEOUT = (-3131, "Modbus timeout")  # twin
+THREAD_ERROR = (-3140, "Invalid thread operation")  # twin
+
+# Errors the shared controller raises with V+ codes, as GPL reports them.
+_FROM_VPLUS = {
+    VPLUS_OUT_OF_RANGE: LOCATION_OUT_OF_RANGE,
+    JOINT_LIMIT: JOINT_OUT_OF_RANGE,
+    STRAIGHT_LINE_CONFIG: STRAIGHT_CONFIG,
+    VPLUS_NULLING_TIMEOUT: NULLING_TIMEOUT,
+}
+
+
+def fail(code: tuple[int, str], detail: str = "") -> GplError:
+    """A GplError for one of the codes above, with an optional detail."""
+    number, message = code
+    return GplError(number, f"{message}: {detail}" if detail else message)
+
+
+def from_controller(err) -> GplError:
+    """A controller ProgramError (V+ code and *text*) as the GPL error."""
+    code = _FROM_VPLUS.get(err.code)
+    if code is None:
+        return GplError(err.code or INVALID_ARGUMENT[0], err.message.strip("*"))
+    detail = err.message.strip("*")
+    return fail(code, detail) if detail != code[1] else fail(code)
+
+
+def unsupported(qualified_name: str, why: str) -> staticmethod:
+    """A shared member the twin cannot offer: it raises -3103 saying why."""
+
+    def member(rt, *args):
+        raise fail(NOT_SUPPORTED, f"{qualified_name} ({why})")
+
+    member.__name__ = qualified_name.rsplit(".", 1)[-1]
+    return shared(member)

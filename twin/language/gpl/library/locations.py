@@ -1,0 +1,475 @@
+"""GPL Location and RefFrame objects (User Manual ch. 12, L1824-1915, L1994-2088).
+
+A Cartesian Location stores its pose relative to its optional RefFrame
+(PosWrtRef) as a twin Location (x, y, z mm; yaw, pitch, roll deg; Z-Y'-Z''
+Euler angles, the convention of manual L1865, the same as V+).  Its "total
+position" (Pos) is the frame's total pose composed with PosWrtRef (L1853).
+An Angles Location stores one value per robot axis (degrees or mm).
+
+Decisions (docs/gpl.md, "Built-in classes"):
+* ``New Location`` is Cartesian at all zeros; setting ``Type`` keeps nothing of
+  the old data (the values become zeros of the new type); conversion between
+  the types is ``Kinesol``.
+* Cartesian-only members on an Angles location (and ``Angle`` on a Cartesian
+  one) raise -3100.
+* Approach point (Move.Approach): with ``ZWorld`` True the total position raised
+  by ZClearance along world +Z; with ZWorld False (default) ZClearance back
+  along the location's own tool Z, ``Pos * Trans(0, 0, -ZClearance)`` (like V+
+  APPRO), which is above the part for a tool pointing down (pitch 180).
+* Pallet frames step along Loc's X (rows), Y (columns), Z (layers); PalletOrder
+  is a 3-digit number naming the dimensions in stepping order, default 123.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ....controller.location import NULL, Location, trans
+from . import codes
+from . import gpl_class, shared
+from .state import from_gpl_angles, solve_joints, to_gpl_angles, tool_pose
+
+CARTESIAN, ANGLES = 0, 1
+MAX_AXES = 12
+MAX_FRAME_DEPTH = 32
+NO_CLEARANCE = 1e32  # what GDE-generated .gpo files write for "no clearance" (digest §8.2)
+
+
+def _number(value) -> float:
+    return float(value)
+
+
+@gpl_class("Location")
+class GplLocation:
+    """A GPL Location object."""
+
+    def __init__(self, rt, *args):
+        if args:
+            raise codes.fail(codes.INVALID_ARGUMENT, "New Location takes no arguments")
+        self._rt = rt
+        self._type = CARTESIAN
+        self._pose = NULL
+        self._angles = [0.0] * MAX_AXES
+        self._frame: GplRefFrame | None = None
+        self._config = 0
+        self._text = ""
+        self._zclearance = 0.0
+        self._zworld = False
+
+    @classmethod
+    def cartesian(cls, rt, pose: Location) -> "GplLocation":
+        loc = cls(rt)
+        loc._pose = pose
+        return loc
+
+    @classmethod
+    def angles(cls, rt, values) -> "GplLocation":
+        loc = cls(rt)
+        loc._type = ANGLES
+        loc._angles[: len(values)] = [float(v) for v in values]
+        return loc
+
+    def __repr__(self) -> str:
+        if self._type == ANGLES:
+            return f"Location(angles {self._angles[: self._rt.robot.kin.dof]})"
+        return f"Location{self._pose.components()}"
+
+    # ------------------------------------------------------------ checks
+    def _cartesian(self) -> None:
+        if self._type != CARTESIAN:
+            raise codes.fail(codes.WRONG_LOCATION_TYPE, "needs a Cartesian Location")
+
+    def _angles_type(self) -> None:
+        if self._type != ANGLES:
+            raise codes.fail(codes.WRONG_LOCATION_TYPE, "needs an Angles Location")
+
+    # ------------------------------------------------------------ poses
+    def total(self) -> Location:
+        """Total position of a Cartesian location (frame chain composed)."""
+        self._cartesian()
+        if self._frame is None:
+            return self._pose
+        return self._frame.total() * self._pose
+
+    def joint_values(self) -> list[float]:
+        """Axis values of an Angles location, one per robot axis."""
+        self._angles_type()
+        return self._angles[: self._rt.robot.kin.dof]
+
+    def _set_total(self, pose: Location) -> None:
+        self._pose = pose if self._frame is None else self._frame.total().inverse() * pose
+
+    # ------------------------------------------------------------ properties
+    @property
+    def Type(self) -> int:
+        return self._type
+
+    @Type.setter
+    def Type(self, value) -> None:
+        value = int(value)
+        if value not in (CARTESIAN, ANGLES):
+            raise codes.fail(codes.INVALID_ARGUMENT, f"Location.Type {value}")
+        if value != self._type:
+            self._type = value
+            self._pose = NULL
+            self._angles = [0.0] * MAX_AXES
+            self._frame = None
+
+    def _component(self, index: int) -> float:
+        self._cartesian()
+        return self._pose.components()[index]
+
+    def _set_component(self, index: int, value) -> None:
+        self._cartesian()
+        values = list(self._pose.components())
+        values[index] = _number(value)
+        self._pose = Location(*values)
+
+    X = property(lambda self: self._component(0), lambda self, v: self._set_component(0, v))
+    Y = property(lambda self: self._component(1), lambda self, v: self._set_component(1, v))
+    Z = property(lambda self: self._component(2), lambda self, v: self._set_component(2, v))
+    Yaw = property(lambda self: self._component(3), lambda self, v: self._set_component(3, v))
+    Pitch = property(lambda self: self._component(4), lambda self, v: self._set_component(4, v))
+    Roll = property(lambda self: self._component(5), lambda self, v: self._set_component(5, v))
+
+    @property
+    def Pos(self) -> "GplLocation":
+        """The total position as a new Location (Cartesian without frame, or Angles)."""
+        if self._type == ANGLES:
+            return GplLocation.angles(self._rt, self.joint_values())
+        return GplLocation.cartesian(self._rt, self.total())
+
+    @Pos.setter
+    def Pos(self, value: "GplLocation") -> None:
+        value = location_arg(value)
+        if self._type == ANGLES:
+            self._angles = list(_location_of_type(value, ANGLES)._angles)
+            return
+        self._set_total(value.total())
+
+    @property
+    def PosWrtRef(self) -> "GplLocation":
+        self._cartesian()
+        return GplLocation.cartesian(self._rt, self._pose)
+
+    @PosWrtRef.setter
+    def PosWrtRef(self, value: "GplLocation") -> None:
+        self._cartesian()
+        self._pose = location_arg(value).total()
+
+    @property
+    def RefFrame(self):
+        return self._frame
+
+    @RefFrame.setter
+    def RefFrame(self, frame) -> None:
+        self._cartesian()
+        if frame is not None and not isinstance(frame, GplRefFrame):
+            raise codes.fail(codes.INVALID_ARGUMENT, "RefFrame must be a RefFrame object")
+        self._frame = frame
+        if frame is not None:
+            frame.total()  # a loop through this location's frame chain is an error now
+
+    @property
+    def Config(self) -> int:
+        return self._config
+
+    @Config.setter
+    def Config(self, value) -> None:
+        self._config = int(value)
+
+    @property
+    def Text(self) -> str:
+        return self._text
+
+    @Text.setter
+    def Text(self, value) -> None:
+        self._text = str(value)
+
+    @property
+    def ZClearance(self) -> float:
+        return self._zclearance
+
+    @ZClearance.setter
+    def ZClearance(self, value) -> None:
+        self._zclearance = _number(value)
+
+    @property
+    def ZWorld(self) -> bool:
+        return self._zworld
+
+    @ZWorld.setter
+    def ZWorld(self, value) -> None:
+        self._zworld = bool(value)
+
+    # ------------------------------------------------------------ Angles members
+    def Angle(self, axis) -> float:
+        self._angles_type()
+        return self._angles[_axis_index(axis)]
+
+    def set_Angle(self, axis, value) -> None:
+        self._angles_type()
+        self._angles[_axis_index(axis)] = _number(value)
+
+    def Angles(self, *values) -> None:
+        self._angles_type()
+        if len(values) > MAX_AXES:
+            raise codes.fail(codes.INVALID_ARGUMENT, f"more than {MAX_AXES} axis values")
+        self._angles = [_number(v) for v in values] + [0.0] * (MAX_AXES - len(values))
+
+    # ------------------------------------------------------------ methods
+    def Clone(self) -> "GplLocation":
+        copy = GplLocation(self._rt)
+        copy.__dict__.update(self.__dict__)
+        copy._angles = list(self._angles)
+        return copy
+
+    @shared
+    def Distance(rt, a: "GplLocation", b: "GplLocation") -> float:
+        """Distance (mm) between the XYZ of the total positions of two Cartesian locations."""
+        return float(np.linalg.norm(location_arg(a).total().position() - location_arg(b).total().position()))
+
+    def Here(self) -> None:
+        """Set the total position to where the (selected) robot is now (L1897)."""
+        q = self._rt.robot.joints()
+        if self._type == ANGLES:
+            self.Angles(*to_gpl_angles(self._rt, q))
+        else:
+            self._set_total(tool_pose(self._rt, q))
+
+    def Here3(self, origin: "GplLocation", on_x: "GplLocation", in_xy: "GplLocation") -> None:
+        """Total position from three points: the origin, a point on +X, a point in the XY plane."""
+        self._cartesian()
+        p0, px, pxy = (location_arg(v).total().position() for v in (origin, on_x, in_xy))
+        x = px - p0
+        z = np.cross(x, pxy - p0)
+        if np.linalg.norm(x) < 1e-9 or np.linalg.norm(z) < 1e-9:
+            raise codes.fail(codes.INVALID_ARGUMENT, "Here3 points are collinear")
+        x /= np.linalg.norm(x)
+        z /= np.linalg.norm(z)
+        T = np.eye(4)
+        T[:3, 0], T[:3, 1], T[:3, 2], T[:3, 3] = x, np.cross(z, x), z, p0
+        self._set_total(Location.from_matrix(T))
+
+    def Inverse(self) -> "GplLocation":
+        return GplLocation.cartesian(self._rt, self.total().inverse())
+
+    def Kinesol(self, *ignored) -> "GplLocation":
+        """Angles -> Cartesian (forward kinematics, Robot.Base and Tool applied) or
+        Cartesian -> Angles (inverse kinematics seeded at the present joints, arm
+        configuration from Config if it asks for one).  The arguments (kinematic
+        model selection) are accepted and ignored: the twin has one robot model."""
+        rt = self._rt
+        if self._type == ANGLES:
+            return GplLocation.cartesian(rt, tool_pose(rt, from_gpl_angles(rt, self.joint_values())))
+        return GplLocation.angles(rt, to_gpl_angles(rt, solve_joints(rt, self.total(), self._config)))
+
+    def Mul(self, other: "GplLocation") -> "GplLocation":
+        """total(self) composed with total(other): other expressed in self's frame (L1875)."""
+        return GplLocation.cartesian(self._rt, self.total() * location_arg(other).total())
+
+    def Normalize(self) -> None:
+        """Re-orthonormalise PosWrtRef's rotation (the twin's poses are always orthonormal:
+        they are stored as angles, so this only rebuilds the same pose)."""
+        self._cartesian()
+        self._pose = Location.from_matrix(self._pose.matrix())
+
+    def XYZ(self, x=0.0, y=0.0, z=0.0, yaw=0.0, pitch=0.0, roll=0.0) -> None:
+        self._cartesian()
+        self._pose = trans(*(_number(v) for v in (x, y, z, yaw, pitch, roll)))
+
+    def XYZInc(self, dx=0.0, dy=0.0, dz=0.0) -> None:
+        self._cartesian()
+        self._pose = self._pose.shifted(_number(dx), _number(dy), _number(dz))
+
+    @shared
+    def XYZValue(rt, x=0.0, y=0.0, z=0.0, yaw=0.0, pitch=0.0, roll=0.0) -> "GplLocation":
+        return GplLocation.cartesian(rt, trans(*(_number(v) for v in (x, y, z, yaw, pitch, roll))))
+
+    def ConveyorLimit(self, *args):
+        raise codes.fail(codes.NOT_SUPPORTED, "Location.ConveyorLimit (conveyor tracking)")
+
+    # ------------------------------------------------------------ motion helpers
+    def clearance(self) -> Location:
+        """The approach position of a Cartesian location (see the module docstring)."""
+        pose = self.total()
+        if self._zclearance >= NO_CLEARANCE:
+            return pose
+        if self._zworld:
+            return pose.shifted(dz=self._zclearance)
+        return pose * trans(z=-self._zclearance)
+
+
+def _location_of_type(value: GplLocation, kind: int) -> GplLocation:
+    if value._type != kind:
+        raise codes.fail(codes.WRONG_LOCATION_TYPE, "the two Locations are of different types")
+    return value
+
+
+def _axis_index(axis) -> int:
+    n = int(axis)
+    if not 1 <= n <= MAX_AXES:
+        raise codes.fail(codes.INVALID_ARGUMENT, f"axis {axis}")
+    return n - 1
+
+
+def location_arg(value) -> GplLocation:
+    if value is None:
+        raise codes.fail(codes.NOTHING_ARGUMENT, "a Location is Nothing")
+    if not isinstance(value, GplLocation):
+        raise codes.fail(codes.INVALID_ARGUMENT, "a Location is needed")
+    return value
+
+
+
+@gpl_class("RefFrame")
+class GplRefFrame:
+    """A GPL reference frame: basic (Type 0) or pallet (Type 1).  Conveyor frames
+    (Type 2) need the conveyor-tracking option, which the twin does not model."""
+
+    def __init__(self, rt, *args):
+        if args:
+            raise codes.fail(codes.INVALID_ARGUMENT, "New RefFrame takes no arguments")
+        self._rt = rt
+        self._type = 0
+        self._loc = GplLocation(rt)
+        self._text = ""
+        self._index = [1, 1, 1]
+        self._max_index = [1, 1, 1]
+        self._pitch = [0.0, 0.0, 0.0]
+        self._order = 123
+
+    @property
+    def Type(self) -> int:
+        return self._type
+
+    @Type.setter
+    def Type(self, value) -> None:
+        value = int(value)
+        if value == 2:
+            raise codes.fail(codes.NOT_SUPPORTED, "conveyor reference frames (conveyor tracking)")
+        if value not in (0, 1):
+            raise codes.fail(codes.INVALID_ARGUMENT, f"RefFrame.Type {value}")
+        self._type = value
+
+    @property
+    def Loc(self) -> GplLocation:
+        return self._loc
+
+    @Loc.setter
+    def Loc(self, value) -> None:
+        self._loc = location_arg(value)
+        self.total()
+
+    @property
+    def Text(self) -> str:
+        return self._text
+
+    @Text.setter
+    def Text(self, value) -> None:
+        self._text = str(value)
+
+    def total(self, depth: int = 0) -> Location:
+        """The frame's total (absolute) pose."""
+        if depth > MAX_FRAME_DEPTH:
+            raise codes.fail(codes.FRAME_LOOP)
+        loc = self._loc
+        loc._cartesian()
+        base = loc._pose if loc._frame is None else loc._frame.total(depth + 1) * loc._pose
+        return base * self._pallet_offset()
+
+    def _pallet_offset(self) -> Location:
+        if self._type != 1:
+            return NULL
+        d = [(i - 1) * p for i, p in zip(self._index, self._pitch)]
+        return trans(*d)
+
+    def Pos(self) -> GplLocation:
+        return GplLocation.cartesian(self._rt, self.total())
+
+    def PosWrtRef(self) -> GplLocation:
+        self._loc._cartesian()
+        return GplLocation.cartesian(self._rt, self._loc._pose * self._pallet_offset())
+
+    def Clone(self) -> "GplRefFrame":
+        copy = GplRefFrame(self._rt)
+        copy.__dict__.update(self.__dict__)
+        copy._loc = self._loc.Clone()
+        copy._index, copy._max_index, copy._pitch = list(self._index), list(self._max_index), list(self._pitch)
+        return copy
+
+    # ------------------------------------------------------------ pallet members
+    def _pallet(self) -> None:
+        if self._type != 1:
+            raise codes.fail(codes.INVALID_ARGUMENT, "not a pallet reference frame (Type 1)")
+
+    def PalletIndex(self, dim) -> int:
+        self._pallet()
+        return self._index[_dim(dim)]
+
+    def set_PalletIndex(self, dim, value) -> None:
+        self._pallet()
+        d = _dim(dim)
+        value = int(value)
+        if not 1 <= value <= self._max_index[d]:
+            raise codes.fail(codes.INVALID_ARGUMENT, f"PalletIndex({dim}) = {value}")
+        self._index[d] = value
+
+    def PalletMaxIndex(self, dim) -> int:
+        self._pallet()
+        return self._max_index[_dim(dim)]
+
+    def set_PalletMaxIndex(self, dim, value) -> None:
+        self._pallet()
+        d = _dim(dim)
+        value = int(value)
+        if value < 1:
+            raise codes.fail(codes.INVALID_ARGUMENT, f"PalletMaxIndex({dim}) = {value}")
+        self._max_index[d] = value
+        self._index[d] = min(self._index[d], value)
+
+    def PalletPitch(self, dim) -> float:
+        self._pallet()
+        return self._pitch[_dim(dim)]
+
+    def set_PalletPitch(self, dim, value) -> None:
+        self._pallet()
+        self._pitch[_dim(dim)] = _number(value)
+
+    @property
+    def PalletOrder(self) -> int:
+        return self._order
+
+    @PalletOrder.setter
+    def PalletOrder(self, value) -> None:
+        value = int(value)
+        if sorted(str(value)) != ["1", "2", "3"]:
+            raise codes.fail(codes.INVALID_ARGUMENT, f"PalletOrder {value} (a permutation of 123)")
+        self._order = value
+
+    def PalletNextPos(self) -> None:
+        """Advance to the next element; after the last one wrap to the first (L2060)."""
+        self._pallet()
+        for digit in str(self._order):
+            d = int(digit) - 1
+            if self._index[d] < self._max_index[d]:
+                self._index[d] += 1
+                return
+            self._index[d] = 1
+
+    def PalletRowColLay(self, row, column, layer=1) -> None:
+        for dim, value in ((1, row), (2, column), (3, layer)):
+            self.set_PalletIndex(dim, value)
+
+    def ConveyorOffset(self, *args):
+        raise codes.fail(codes.NOT_SUPPORTED, "conveyor reference frames (conveyor tracking)")
+
+    ConveyorRobot = ConveyorOffset
+
+
+def _dim(dim) -> int:
+    d = int(dim)
+    if d not in (1, 2, 3):
+        raise codes.fail(codes.INVALID_ARGUMENT, f"pallet dimension {dim} (1 row, 2 column, 3 layer)")
+    return d - 1
+

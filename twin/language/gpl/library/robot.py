@@ -1,0 +1,277 @@
+"""The global Robot and Controller classes (User Manual ch. 12, L2092-2185).
+
+The twin has one robot, number 1.  Robot members that read state take an
+optional robot number; any other number raises -1000.  What needs hardware the
+twin does not model (encoders, motor temperatures, the pendant, the parameter
+database beyond a few entries, loading other projects) raises -3103 with the
+reason; docs/gpl.md lists how each member is treated.
+"""
+
+from __future__ import annotations
+
+from ....controller.location import NULL
+from . import codes
+from . import Ref, byref, gpl_class, shared
+from .locations import GplLocation, location_arg
+from .motion import GplProfile, destination_joints
+from .state import check_robot, robot_state, to_gpl_angles, tool_pose
+
+# Controller.PowerState values (twin-defined: the manual does not list the sequence's states).
+POWER_STATE_OFF, POWER_STATE_ON = 0, 20
+
+
+@gpl_class("Robot")
+class Robot:
+    """The global Robot class."""
+
+    @shared
+    def Attached(rt) -> int:
+        """1 when the calling thread has robot 1 attached, else 0."""
+        return 1 if robot_state(rt).attached_by == rt.current_thread() else 0
+
+    @shared
+    def set_Attached(rt, number) -> None:
+        """Attach robot `number` to the calling thread (0 detaches).  Only one thread can
+        have the robot; another thread's attach is refused while the holder is alive."""
+        state = robot_state(rt)
+        me = rt.current_thread()
+        number = int(number)
+        if number == 0:
+            if state.attached_by == me:
+                state.attached_by = None
+            return
+        check_robot(number)
+        holder = state.attached_by
+        if holder is not None and holder != me and getattr(holder, "alive", True):
+            raise codes.fail(codes.ROBOT_ALREADY_ATTACHED, "by another thread")
+        state.attached_by = me
+
+    @shared
+    def Selected(rt) -> int:
+        return robot_state(rt).selected
+
+    @shared
+    def set_Selected(rt, number) -> None:
+        check_robot(number)
+        robot_state(rt).selected = int(number)
+
+    @shared
+    def Home(rt) -> None:
+        """Home the attached robot: the twin's encoders are absolute, so homing only marks
+        the robot homed (it needs high power, as on the controller)."""
+        state = robot_state(rt)
+        if not state.power:
+            raise codes.fail(codes.POWER_OFF)
+        if state.attached_by is None or state.attached_by != rt.current_thread():
+            raise codes.fail(codes.NO_ROBOT_ATTACHED)
+        state.homed = True
+
+    @shared
+    def HomeAll(rt) -> None:
+        state = robot_state(rt)
+        if not state.power:
+            raise codes.fail(codes.POWER_OFF)
+        state.homed = True
+
+    @shared
+    def Where(rt, robot=1) -> GplLocation:
+        """Current Cartesian position, from the measured joints (Base and Tool applied)."""
+        check_robot(robot)
+        return GplLocation.cartesian(rt, tool_pose(rt, rt.robot.joints()))
+
+    @shared
+    def WhereAngles(rt, robot=1) -> GplLocation:
+        check_robot(robot)
+        return GplLocation.angles(rt, to_gpl_angles(rt, rt.robot.joints()))
+
+    @shared
+    def Dest(rt, robot=1) -> GplLocation:
+        """Cartesian destination of the last motion."""
+        check_robot(robot)
+        state = robot_state(rt)
+        return GplLocation.cartesian(rt, state.base * rt.robot.destination() * state.tool)
+
+    @shared
+    def DestAngles(rt, robot=1) -> GplLocation:
+        check_robot(robot)
+        return GplLocation.angles(rt, to_gpl_angles(rt, destination_joints(rt)))
+
+    @shared
+    def Source(rt, robot=1) -> GplLocation:
+        """Cartesian start of the last motion (the present position before any motion)."""
+        check_robot(robot)
+        state = robot_state(rt)
+        source = state.source if state.source is not None else rt.robot.destination()
+        return GplLocation.cartesian(rt, state.base * source * state.tool)
+
+    @shared
+    def SpeedAngles(rt, robot=1) -> GplLocation:
+        """Instantaneous axis speeds (deg/s or mm/s) as an Angles location."""
+        check_robot(robot)
+        return GplLocation.angles(rt, to_gpl_angles(rt, rt.robot.cell.robot_qvel()))
+
+    @shared
+    def Base(rt, robot=1) -> GplLocation:
+        check_robot(robot)
+        return GplLocation.cartesian(rt, robot_state(rt).base)
+
+    @shared
+    def set_Base(rt, value) -> None:
+        robot_state(rt).base = location_arg(value).total()
+
+    @shared
+    def Tool(rt, robot=1) -> GplLocation:
+        check_robot(robot)
+        return GplLocation.cartesian(rt, robot_state(rt).tool)
+
+    @shared
+    def set_Tool(rt, value) -> None:
+        robot_state(rt).tool = location_arg(value).total()
+
+    @shared
+    def RestartBase(rt, robot=1) -> GplLocation:
+        check_robot(robot)
+        return GplLocation.cartesian(rt, NULL)
+
+    RestartTool = RestartBase
+
+    @shared
+    def LastProfile(rt, robot=1) -> GplProfile:
+        check_robot(robot)
+        last = robot_state(rt).last_profile
+        return last.Clone() if last is not None else GplProfile(rt)
+
+    @shared
+    def Payload(rt, robot=1) -> float:
+        check_robot(robot)
+        return robot_state(rt).payload
+
+    @shared
+    def set_Payload(rt, value) -> None:
+        """Kept for reading back; the twin's servo model does not use it (the grasped part's
+        mass is simulated by MuJoCo)."""
+        robot_state(rt).payload = float(value)
+
+    @shared
+    def set_RapidDecel(rt, value) -> None:
+        """True stops any motion in progress at once."""
+        if value:
+            rt.robot.stop()
+
+    @shared
+    def TrajState(rt, robot=1) -> int:
+        """Twin-defined codes: 0 idle, 1 moving."""
+        check_robot(robot)
+        return 1 if rt.robot.moving else 0
+
+    @shared
+    def CartMode(rt, robot=1) -> int:
+        """No special Cartesian mode is ever active in the twin."""
+        check_robot(robot)
+        return 0
+
+    JointToMotor = codes.unsupported("Robot.JointToMotor", "the twin has no motor encoders")
+    MotorToJoint = codes.unsupported("Robot.MotorToJoint", "the twin has no motor encoders")
+    DefLinComp = codes.unsupported("Robot.DefLinComp", "the twin has no motor encoders")
+    MotorTempStatus = codes.unsupported("Robot.MotorTempStatus", "motor temperatures are not simulated")
+    Custom = codes.unsupported("Robot.Custom", "kinematic-module parameters")
+    RealTimeModAcm = codes.unsupported("Robot.RealTimeModAcm", "real-time path modification")
+
+
+@gpl_class("Controller")
+class Controller:
+    """The global Controller class."""
+
+    @shared
+    def PowerEnabled(rt) -> bool:
+        return robot_state(rt).power
+
+    @shared
+    def set_PowerEnabled(rt, value) -> None:
+        """Power comes on at once in the twin (no amplifier sequence); turning it off stops
+        any motion."""
+        state = robot_state(rt)
+        state.power = bool(value)
+        if not state.power:
+            rt.robot.stop()
+
+    @shared
+    def PowerState(rt) -> int:
+        return POWER_STATE_ON if robot_state(rt).power else POWER_STATE_OFF
+
+    @shared
+    def SoftEStop(rt) -> bool:
+        return False
+
+    @shared
+    def set_SoftEStop(rt, value) -> None:
+        """A soft E-stop stops the robot and turns high power off."""
+        if value:
+            rt.robot.stop()
+            robot_state(rt).power = False
+
+    @shared
+    def SystemSpeed(rt) -> float:
+        """Global speed (percent) scaling every motion: the controller's monitor speed."""
+        return rt.robot.settings.monitor_speed
+
+    @shared
+    def set_SystemSpeed(rt, value) -> None:
+        value = float(value)
+        if not 0.0 < value <= 100.0:
+            raise codes.fail(codes.INVALID_ARGUMENT, f"SystemSpeed = {value:g} (0 < percent <= 100)")
+        rt.robot.set_speed(value, monitor=True)
+
+    @shared
+    def Tick(rt) -> float:
+        """Trajectory generator period, s: the twin feeds the servos every physics step."""
+        return rt.robot.dt
+
+    @shared
+    def Timer(rt) -> float:
+        """Simulated seconds since the run started."""
+        return rt.clock()
+
+    @shared
+    def SleepTick(rt, ticks):
+        """Sleep `ticks` trajectory generator periods."""
+        end = rt.clock() + max(int(ticks), 0) * rt.robot.dt
+        yield lambda: rt.clock() >= end - 1e-9
+
+    @shared
+    def SystemMessage(rt, message) -> None:
+        """Append to the system message log (kept in the run, shown with the console output)."""
+        text = str(message)
+        robot_state(rt).messages.append(text)
+        rt.console.write(f"[SystemMessage] {text}\n")
+
+    @byref(2)
+    @shared
+    def ShowDialog(rt, buttons, message, button: Ref) -> None:
+        """Headless: nobody can press a button, so the dialog is answered with its first
+        button (1), and the message goes to the system message log."""
+        Controller.SystemMessage(rt, f"{message} [{buttons}] -> 1")
+        button.value = 1
+
+    @byref(2)
+    @shared
+    def ShowDialogMCP(rt, mask, message, button: Ref) -> None:
+        Controller.SystemMessage(rt, f"{message} (MCP) -> 1")
+        button.value = 1
+
+    @shared
+    def RecordButton(rt) -> bool:
+        """No pendant: the RECORD button is never pressed."""
+        return False
+
+    @shared
+    def set_RecordButton(rt, value) -> None:
+        """Clearing the latched flag is accepted; there is no pendant to set it."""
+
+    Command = codes.unsupported("Controller.Command", "console commands")
+    ErrorLog = codes.unsupported("Controller.ErrorLog", "the system error log")
+    Load = codes.unsupported("Controller.Load", "one project per run")
+    Unload = codes.unsupported("Controller.Unload", "one project per run")
+    PDb = codes.unsupported("Controller.PDb", "the parameter database")
+    PDbNum = codes.unsupported("Controller.PDbNum", "the parameter database")
+
