@@ -21,6 +21,14 @@ expression, `(x)`, `loc:NULL` or `$s+""`, is not written back).
 
 Every generated line is mapped back to the V+ statement it came from
 (`CompiledProgram.line_map`), so errors report file, line and step.
+
+GOTO: Python has no jump, so a program that uses GOTO (or a multi-level
+EXIT/NEXT) is lowered to a jump table: its body is cut into basic blocks at
+the labels GOTO targets and at the joins of the blocks it lowers, and runs as
+`while True:` around a binary dispatch on the block number `_pc`.  Only the
+IF/FOR/WHILE/DO/CASE blocks that hold a GOTO, a GOTO target or a multi-level
+EXIT are lowered to jumps; the others stay structured Python inside their
+basic block, and programs without GOTO keep the structured form entirely.
 """
 
 from __future__ import annotations
@@ -71,6 +79,59 @@ def is_string(expr: ast.Expr) -> bool:
     return False
 
 
+_LOOPS = (ast.For, ast.While, ast.DoUntil)
+
+
+def _bodies(s: ast.Statement) -> list[list[ast.Statement]]:
+    if isinstance(s, ast.If):
+        return [s.body, s.orelse]
+    if isinstance(s, (ast.For, ast.While, ast.DoUntil)):
+        return [s.body]
+    if isinstance(s, ast.Case):
+        return [body for _, body in s.cases] + ([s.default] if s.default is not None else [])
+    return []
+
+
+def _walk(body: list[ast.Statement]):
+    for s in body:
+        yield s
+        for inner in _bodies(s):
+            yield from _walk(inner)
+
+
+def _loop_control(s: ast.Statement) -> tuple[str, int] | None:
+    """("EXIT" | "NEXT", levels) for EXIT [n] and NEXT [n], else None."""
+    if not isinstance(s, ast.Instruction) or s.name not in ("EXIT", "NEXT"):
+        return None
+    if not s.args:
+        return s.name, 1
+    level = s.args[0]
+    if len(s.args) > 1 or not isinstance(level, ast.Num) or level.value < 1 or not float(level.value).is_integer():
+        raise ProgramError(f"{msg.message(msg.INVALID_ARGUMENT)} {s.name} level", msg.INVALID_ARGUMENT,
+                           line=s.line, column=s.column, step=s.step)
+    return s.name, int(level.value)
+
+
+def _forces_jumps(s: ast.Statement, targets: set[int]) -> bool:
+    """A statement that only the jump-table form can run."""
+    control = _loop_control(s)
+    return (isinstance(s, (ast.Goto, ast.IfGoto)) or s.label in targets
+            or (control is not None and control[1] > 1))
+
+
+@dataclass
+class _Op:
+    """One step of a lowered program: a statement compiled as usual, a block
+    boundary, a jump, or a conditional jump on a Python condition."""
+
+    kind: str  # "stmt", "mark", "jump", "branch", "code"
+    statement: ast.Statement | None = None
+    target: int = -1  # mark id
+    condition: str = ""  # for "branch": jump when this Python condition holds
+    emit: object = None  # for "code": callable(depth) that emits lines
+    loops: tuple = ()  # the loop stack a "stmt" is compiled under
+
+
 @dataclass
 class _Scope:
     auto: set[str] = field(default_factory=set)  # names kept as Python locals
@@ -87,6 +148,12 @@ class ProgramCompiler:
         self.temp = 0
         self.current: ast.Statement | None = None
         self.count = 0
+        # Enclosing loops for EXIT/NEXT: ("py", tail emitter) for a Python
+        # loop, ("jump", exit mark, next mark) for a lowered one.
+        self.loops: list[tuple] = []
+        self.targets: set[int] = set()
+        self.marks = 0
+        self.block_of: dict[int, int] = {}  # mark id -> basic block index
 
     # ----------------------------------------------------------------- output
     def emit(self, depth: int, text: str) -> None:
@@ -123,8 +190,12 @@ class ProgramCompiler:
             local = self.pyname(param)
             self.emit(1, f"if len(_args) > {i} and _args[{i}] is not None:")
             self.emit(2, f"{local} = _args[{i}]")
-        self.block(p.body, 1)
-        self.emit_return(1)
+        self.targets = self.goto_targets(p.body)
+        if any(_forces_jumps(t, self.targets) for t in _walk(p.body)):
+            self.jump_table(p.body, 1)
+        else:
+            self.block(p.body, 1)
+            self.emit_return(1)
         return CompiledProgram(p.name, "\n".join(self.lines) + "\n", self.line_map, p.file, p.params,
                                statement_count=self.count)
 
@@ -338,31 +409,69 @@ class ProgramCompiler:
         self.emit(depth + 1, "_slice = 0")
         self.emit(depth + 1, "yield rt.SLICE")
 
-    def s_For(self, s: ast.For, depth: int) -> None:
-        stop, step = self.fresh("stop"), self.fresh("step")
+    def for_start(self, s: ast.For, stop: str, step: str, depth: int) -> None:
+        """FOR evaluates its limit and step once, before the first pass."""
         self.emit(depth, f"{stop} = _real({self.expr(s.stop)})")
         self.emit(depth, f"{step} = {self.expr(s.step_by) if s.step_by else '1.0'}")
         self.emit(depth, f"if {step} == 0: rt.zero_step()")
         self.assign(s.target, f"_real({self.expr(s.start)})", depth)
+
+    def for_test(self, s: ast.For, stop: str, step: str) -> str:
         current = self.read(s.target)
-        self.emit(depth, f"while ({current} <= {stop}) if {step} > 0 else ({current} >= {stop}):")
-        self.block(s.body, depth + 1)
-        self.current = s
-        self.assign(s.target, f"{self.read(s.target)} + {step}", depth + 1)
-        self.slice_check(depth + 1)
+        return f"(({current} <= {stop}) if {step} > 0 else ({current} >= {stop}))"
+
+    def loop_body(self, body: list[ast.Statement], tail, depth: int) -> None:
+        """A Python loop's body, then its tail (what NEXT runs before `continue`)."""
+        self.loops.append(("py", tail))
+        self.block(body, depth)
+        self.loops.pop()
+        tail(depth)
+
+    def s_For(self, s: ast.For, depth: int) -> None:
+        stop, step = self.fresh("stop"), self.fresh("step")
+        self.for_start(s, stop, step, depth)
+        self.emit(depth, f"while {self.for_test(s, stop, step)}:")
+
+        def tail(d: int) -> None:
+            self.current = s
+            self.assign(s.target, f"{self.read(s.target)} + {step}", d)
+            self.slice_check(d)
+
+        self.loop_body(s.body, tail, depth + 1)
 
     def s_While(self, s: ast.While, depth: int) -> None:
         self.emit(depth, f"while {self.condition(s.condition)}:")
-        self.block(s.body, depth + 1)
-        self.current = s
-        self.slice_check(depth + 1)
+
+        def tail(d: int) -> None:
+            self.current = s
+            self.slice_check(d)
+
+        self.loop_body(s.body, tail, depth + 1)
 
     def s_DoUntil(self, s: ast.DoUntil, depth: int) -> None:
         self.emit(depth, "while True:")
-        self.block(s.body, depth + 1)
-        self.current = s
-        self.emit(depth + 1, f"if {self.condition(s.condition)}: break")
-        self.slice_check(depth + 1)
+
+        def tail(d: int) -> None:
+            self.current = s
+            self.emit(d, f"if {self.condition(s.condition)}: break")
+            self.slice_check(d)
+
+        self.loop_body(s.body, tail, depth + 1)
+
+    def loop_control(self, s: ast.Instruction, depth: int) -> None:
+        """EXIT leaves the innermost loop, NEXT starts its next pass ([000] L5043, L5106)."""
+        name, level = _loop_control(s)
+        if not self.loops:
+            raise self.error(s, msg.CONTROL_STRUCTURE, f"{name} outside a loop")
+        loop = self.loops[-1]  # a multi-level EXIT/NEXT always goes to the jump table
+        if loop[0] == "jump":
+            self.emit(depth, f"_pc = {self.block_of[loop[1] if name == 'EXIT' else loop[2]]}")
+            self.emit(depth, "continue")
+        elif name == "EXIT":
+            self.emit(depth, "break")
+        else:
+            loop[1](depth)
+            self.emit(depth, "continue")
 
     def s_Case(self, s: ast.Case, depth: int) -> None:
         subject = self.fresh("case")
@@ -378,11 +487,176 @@ class ProgramCompiler:
             self.emit(depth, "else:" if s.cases else "if True:")
             self.block(s.default, depth + 1)
 
-    def s_Goto(self, s: ast.Goto, depth: int) -> None:
-        # Labels and GOTO need the jump-table form of the compiler (issue #3).
-        raise self.error(s, msg.UNKNOWN_KEYWORD, "GOTO is not supported yet")
+    # ------------------------------------------------------------ GOTO
+    def goto_targets(self, body: list[ast.Statement]) -> set[int]:
+        """The labels some GOTO names; a missing or doubled label is a load error."""
+        labels: dict[int, ast.Statement] = {}
+        for t in _walk(body):
+            if t.label is not None:
+                if t.label in labels:
+                    raise self.error(t, msg.CONTROL_STRUCTURE, f"label {t.label} used twice")
+                labels[t.label] = t
+        targets = set()
+        for t in _walk(body):
+            if isinstance(t, (ast.Goto, ast.IfGoto)):
+                if t.target not in labels:
+                    raise self.error(t, msg.UNDEFINED_LABEL, str(t.target))
+                targets.add(t.target)
+        return targets
 
-    s_IfGoto = s_Goto
+    def needs_jumps(self, s: ast.Statement) -> bool:
+        """Does a block statement hold something only jumps can express?"""
+        return any(_forces_jumps(t, self.targets) for body in _bodies(s) for t in _walk(body))
+
+    def mark(self) -> int:
+        self.marks += 1
+        return self.marks
+
+    def lower(self, body: list[ast.Statement], ops: list[_Op]) -> None:
+        """Append the ops of `body`: statements, marks and jumps."""
+        for s in body:
+            if s.label in self.targets:
+                ops.append(_Op("mark", s, target=self.label_mark(s.label)))
+            if isinstance(s, ast.Goto):
+                ops.append(_Op("jump", s, target=self.label_mark(s.target)))
+            elif isinstance(s, ast.IfGoto):
+                ops.append(_Op("branch", s, target=self.label_mark(s.target), condition=self.condition(s.condition)))
+            elif _loop_control(s) is not None:
+                ops.append(self.loop_jump(s))
+            elif self.needs_jumps(s):
+                getattr(self, "lower_" + type(s).__name__)(s, ops)
+            elif not isinstance(s, ast.LabelOnly):
+                ops.append(_Op("stmt", s, loops=tuple(self.loops)))
+
+    def label_mark(self, label: int) -> int:
+        return -label - 1  # label marks are negative, generated marks positive
+
+    def loop_jump(self, s: ast.Instruction) -> _Op:
+        name, level = _loop_control(s)
+        if level > len(self.loops):
+            raise self.error(s, msg.CONTROL_STRUCTURE, f"{name} outside a loop")
+        loop = self.loops[-level]
+        if loop[0] != "jump":  # only a multi-level EXIT reaches here; it lowers every loop it crosses
+            raise self.error(s, msg.CONTROL_STRUCTURE, f"{name} {level}")
+        return _Op("jump", s, target=loop[1] if name == "EXIT" else loop[2])
+
+    def lower_If(self, s: ast.If, ops: list[_Op]) -> None:
+        orelse, end = self.mark(), self.mark()
+        ops.append(_Op("branch", s, target=orelse, condition=f"not {self.condition(s.condition)}"))
+        self.lower(s.body, ops)
+        ops.append(_Op("jump", s, target=end))
+        ops.append(_Op("mark", s, target=orelse))
+        self.lower(s.orelse, ops)
+        ops.append(_Op("mark", s, target=end))
+
+    def lower_loop(self, s: ast.Statement, ops: list[_Op], next_: int, end: int) -> None:
+        self.loops.append(("jump", end, next_))
+        self.lower(s.body, ops)
+        self.loops.pop()
+        ops.append(_Op("mark", s, target=next_))
+
+    def lower_While(self, s: ast.While, ops: list[_Op]) -> None:
+        top, end = self.mark(), self.mark()
+        ops.append(_Op("mark", s, target=top))
+        ops.append(_Op("branch", s, target=end, condition=f"not {self.condition(s.condition)}"))
+        self.lower_loop(s, ops, top, end)
+        ops.append(_Op("jump", s, target=top))
+        ops.append(_Op("mark", s, target=end))
+
+    def lower_DoUntil(self, s: ast.DoUntil, ops: list[_Op]) -> None:
+        top, test, end = self.mark(), self.mark(), self.mark()
+        ops.append(_Op("mark", s, target=top))
+        self.lower_loop(s, ops, test, end)
+        ops.append(_Op("branch", s, target=top, condition=f"not {self.condition(s.condition)}"))
+        ops.append(_Op("mark", s, target=end))
+
+    def lower_For(self, s: ast.For, ops: list[_Op]) -> None:
+        top, next_, end = self.mark(), self.mark(), self.mark()
+        stop, step = self.fresh("stop"), self.fresh("step")
+        ops.append(_Op("code", s, emit=lambda depth: self.for_start(s, stop, step, depth)))
+        ops.append(_Op("mark", s, target=top))
+        ops.append(_Op("branch", s, target=end, condition=f"not {self.for_test(s, stop, step)}"))
+        self.lower_loop(s, ops, next_, end)
+        ops.append(_Op("code", s, emit=lambda depth: self.assign(s.target, f"{self.read(s.target)} + {step}", depth)))
+        ops.append(_Op("jump", s, target=top))
+        ops.append(_Op("mark", s, target=end))
+
+    def lower_Case(self, s: ast.Case, ops: list[_Op]) -> None:
+        subject, end = self.fresh("case"), self.mark()
+        ops.append(_Op("code", s, emit=lambda depth: self.emit(depth, f"{subject} = {self.expr(s.subject)}")))
+        entries = []
+        for values, body in s.cases:
+            entry = self.mark()
+            tests = " or ".join(f"{subject} == {self.expr(v)}" for v in values)
+            ops.append(_Op("branch", s, target=entry, condition=f"({tests})"))
+            entries.append((entry, body))
+        if s.default is not None:
+            entry = self.mark()
+            ops.append(_Op("jump", s, target=entry))
+            entries.append((entry, s.default))
+        else:
+            ops.append(_Op("jump", s, target=end))
+        for entry, body in entries:
+            ops.append(_Op("mark", s, target=entry))
+            self.lower(body, ops)
+            ops.append(_Op("jump", s, target=end))
+        ops.append(_Op("mark", s, target=end))
+
+    def jump_table(self, body: list[ast.Statement], depth: int) -> None:
+        """Compile `body` as basic blocks run by a dispatch loop on `_pc`."""
+        ops: list[_Op] = []
+        self.lower(body, ops)
+        blocks: list[list[_Op]] = [[]]
+        for op in ops:
+            if op.kind == "mark":
+                if blocks[-1]:
+                    blocks.append([])
+                self.block_of[op.target] = len(blocks) - 1
+            else:
+                blocks[-1].append(op)
+        self.emit(depth, "_pc = 0")
+        self.emit(depth, "while True:")
+        self.dispatch(blocks, 0, len(blocks), depth + 1)
+
+    def dispatch(self, blocks: list[list[_Op]], low: int, high: int, depth: int) -> None:
+        """A binary search on `_pc`: a jump costs log2(blocks) comparisons."""
+        if high - low == 1:
+            self.basic_block(blocks, low, depth)
+            return
+        middle = (low + high) // 2
+        self.emit(depth, f"if _pc < {middle}:")
+        self.dispatch(blocks, low, middle, depth + 1)
+        self.emit(depth, "else:")
+        self.dispatch(blocks, middle, high, depth + 1)
+
+    def basic_block(self, blocks: list[list[_Op]], index: int, depth: int) -> None:
+        ops = blocks[index]
+        for op in ops:
+            self.current = op.statement
+            if op.kind == "stmt":
+                saved, self.loops = self.loops, list(op.loops)
+                self.statement(op.statement, depth)
+                self.loops = saved
+            elif op.kind == "code":
+                op.emit(depth)
+            elif op.kind == "jump":
+                self.jump(index, op.target, depth)
+                return
+            else:
+                self.emit(depth, f"if {op.condition}:")
+                self.jump(index, op.target, depth + 1)
+        if index + 1 < len(blocks):
+            self.emit(depth, f"_pc = {index + 1}")
+        else:
+            self.emit_return(depth)
+
+    def jump(self, here: int, mark: int, depth: int) -> None:
+        target = self.block_of[mark]
+        self.emit(depth, f"_pc = {target}")
+        if target <= here:  # a backward jump closes a loop: time-slice it
+            self.slice_check(depth)
+        self.emit(depth, "continue")
+
 
     def s_CallProgram(self, s: ast.CallProgram, depth: int) -> None:
         args = ", ".join("None" if a is None else self.expr(a) for a in s.args)
@@ -426,6 +700,9 @@ class ProgramCompiler:
         name = s.name
         if name == "RETURN":
             self.emit_return(depth)
+            return
+        if name in ("EXIT", "NEXT"):
+            self.loop_control(s, depth)
             return
         if name == "WAIT" and s.args:
             # WAIT expr re-evaluates the condition each scheduling cycle.
