@@ -17,11 +17,16 @@ class Clock:
         return self.t
 
 
-def run_vplus(text: str, main: str | None = None, stdin: str = "", max_cycles: int = 100000):
-    """Load `text`, run its first (or `main`) program to the end; return (system, task)."""
+def run_vplus(text: str, main: str | None = None, stdin: str = "", max_cycles: int = 100000,
+              sandbox=None, setup=None):
+    """Load `text`, run its first (or `main`) program to the end; return (system, task).
+    `sandbox` is the disk folder; `setup(system)` runs before the program starts
+    (to feed serial lines, set signals...)."""
     clock = Clock()
     console = Console(stdin=io.StringIO(stdin), echo=None)
-    system = VPlusSystem(robot=None, io=DigitalIO(), clock=clock, console=console)
+    system = VPlusSystem(robot=None, io=DigitalIO(), clock=clock, console=console, sandbox=sandbox)
+    if setup is not None:
+        setup(system)
     names = system.load_text(text, "test.pg")
     task = system.start(main or names[0])
     scheduler = Scheduler()

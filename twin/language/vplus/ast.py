@@ -284,3 +284,25 @@ class Module:
     file: str
     programs: list[Program]
     data: list[DataSection]
+
+
+# ---------------------------------------------------- I/O and keyed statements
+# (lang-library: the V+ function and instruction library, issue #3)
+@dataclass
+class IoStatement(Statement):
+    """An instruction on a logical unit: ATTACH (lun, 4) "DISK", READ (lun) $x,
+    WRITE (lun) "text", /S, FOPENR (lun) $name, GTYPE (glun) x, y, $s."""
+
+    name: str  # upper case
+    unit: list[Expr | None]  # what the parentheses hold: lun[, mode, record...]
+    items: list["Expr | Format"]
+
+
+@dataclass
+class KeyedAssign(Statement):
+    """An instruction that assigns what it names: BITS 1, 8 = 255,
+    DECOMPOSE parts[] = loc, SWITCH CP = SIG(1001), TIMER 1 = 0."""
+
+    name: str  # upper case
+    args: list[Expr | None]
+    value: Expr

@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 from ...errors import ProgramError
 from . import ast
 from . import messages as msg
+from .compile_library import LIBRARY_CALLS, LibraryStatements
 from .keywords import FUNCTIONS, INSTRUCTIONS, STRING_FUNCTIONS
 
 # A time slice: loops hand the CPU back to the scheduler every this many
@@ -139,7 +140,7 @@ class _Scope:
     doubles: set[str] = field(default_factory=set)
 
 
-class ProgramCompiler:
+class ProgramCompiler(LibraryStatements):
     def __init__(self, program: ast.Program):
         self.program = program
         self.lines: list[str] = []
@@ -332,6 +333,8 @@ class ProgramCompiler:
     def call(self, e: ast.Call) -> str:
         if e.name == "DEFINED":
             return self.defined(e)
+        if e.name in LIBRARY_CALLS:
+            return self.library_call(e)  # $DECODE, TAS, PARAMETER(name): see compile_library.py
         table = STRING_FUNCTIONS if e.name.startswith("$") else FUNCTIONS
         if e.name not in table:
             raise ProgramError(f"{msg.message(msg.UNDEFINED_PROGRAM)} {e.name}", msg.UNDEFINED_PROGRAM)

@@ -35,6 +35,19 @@ ROBOT_NOT_ATTACHED = -601  # (LRG)
 COLLISION = -1020  # twin-defined: the real controller does not see the cell
 JOINT_LIMIT = -1021  # twin-defined code; text as the controller prints it, "*Joint N limit stop*"
 STRAIGHT_LINE_CONFIG = -1022  # twin-defined code for the controller's configuration-change refusal
+# I/O errors the guides name without a code (V+ guide v17, "Disk I/O", "Serial I/O").
+# The search tool found only the LRG's index page (errors -300..-1300), not its
+# numerical list, so these codes are twin's choice inside the LRG's -5xx I/O
+# block, clear of the printed -504/-522/-524/-526 (docs/vplus.md).
+NONEXISTENT_FILE = -500  # twin-chosen
+ILLEGAL_IO_COMMAND = -502  # twin-chosen
+DEVICE_NOT_READY = -506  # twin-chosen; text printed in [000] L7404-7406
+FILE_EXISTS = -512  # twin-chosen
+FILE_ALREADY_OPEN = -513  # twin-chosen
+FILE_NOT_OPEN = -514  # twin-chosen
+NOT_ATTACHED = -516  # twin-chosen
+ALREADY_ATTACHED = -517  # twin-chosen
+INVALID_FILE_SPEC = -518  # twin-chosen
 
 MESSAGES: dict[int, str] = {
     UNEXPECTED_EOF: "*Unexpected end of file*",
@@ -69,6 +82,15 @@ MESSAGES: dict[int, str] = {
     COLLISION: "*Collision detected*",
     JOINT_LIMIT: "*Joint limit stop*",
     STRAIGHT_LINE_CONFIG: "*Straight-line motion can't alter configuration*",
+    NONEXISTENT_FILE: "*Nonexistent file*",
+    ILLEGAL_IO_COMMAND: "*Illegal I/O device command*",
+    DEVICE_NOT_READY: "*Device not ready*",
+    FILE_EXISTS: "*File already exists*",
+    FILE_ALREADY_OPEN: "*File already open*",
+    FILE_NOT_OPEN: "*File not opened*",
+    NOT_ATTACHED: "*Not attached to logical unit*",
+    ALREADY_ATTACHED: "*Logical unit already attached*",
+    INVALID_FILE_SPEC: "*Invalid file specification*",
 }
 
 

@@ -216,6 +216,18 @@ class _ToAst(Transformer):
     def instruction(self, meta, children):
         return ast.Instruction(str(children[0]).upper(), children[1], **_pos(meta))
 
+    # ---- I/O and keyed statements (lang-library)
+    def io_statement(self, meta, children):
+        name, unit, *items = children
+        return ast.IoStatement(str(name).upper(), unit, [i for i in items if i is not None], **_pos(meta))
+
+    def keyed_assignment(self, meta, children):
+        name, args, value = children
+        return ast.KeyedAssign(str(name).upper(), args, value, **_pos(meta))
+
+    def encode_call(self, meta, children):
+        return ast.Call("$ENCODE", [c for c in children[1:] if c is not None])
+
     # ---- units
     def param(self, meta, children):
         return children[0]

@@ -22,17 +22,13 @@ from ...errors import ProgramError
 from . import messages as msg
 from . import values
 from .compiler import CompiledProgram, compile_program
+from .fileio import Devices
 from .formats import _fmt, render
 from .keywords import FUNCTIONS, INSTRUCTIONS, STRING_FUNCTIONS
 from .parser import normalize_name, parse, parse_file
+# Parameters and switches with the manuals' defaults and limits.
+from .settings import PARAMETER_DEFAULTS, SWITCH_DEFAULTS, in_range
 
-# Parameters and their defaults (V+ guide v17, "System Parameters").
-PARAMETER_DEFAULTS = {"HAND.TIME": 0.05, "BELT.MODE": 0.0, "NOT.CALIBRATED": 0.0, "TERMINAL": 4.0}
-# Switches and their defaults (V+ guide v17, "System Switches").
-SWITCH_DEFAULTS = {
-    "CP": True, "UPPER": True, "MESSAGES": True, "DRY.RUN": False, "BELT": False, "POWER": True,
-    "TRACE": False, "DECEL.100": False, "FORCE": False, "INTERACTIVE": True, "SET.SPEED": True,
-}
 MAJOR_CYCLE = 0.016  # s: the V+ scheduler's major cycle and trajectory period
 MAX_CALL_DEPTH = 200  # "*Too many subroutine calls*" past this many nested CALLs
 
@@ -89,7 +85,8 @@ class Console:
 class VPlusSystem:
     """Controller memory for V+: programs, variables, parameters, switches."""
 
-    def __init__(self, robot, io, clock: Callable[[], float], console: Console | None = None, seed: int = 0):
+    def __init__(self, robot, io, clock: Callable[[], float], console: Console | None = None, seed: int = 0,
+                 sandbox: str | Path | None = None):
         self.robot = robot  # the shared virtual controller (motion, hand)
         self.io = io  # digital signals
         self.clock = clock  # simulated time, s
@@ -101,6 +98,9 @@ class VPlusSystem:
         self.switches = dict(SWITCH_DEFAULTS)
         self.random = np.random.default_rng(seed)
         self.tasks: list[Task] = []
+        # Logical units; disk files live in `sandbox` (no disk when it is None).
+        self.devices = Devices(sandbox, self.console)
+        self.timers: dict[int, float] = {}  # TIMER n = value: the clock reading that timer n counts from
 
     # ------------------------------------------------------------ loading
     def load(self, path: str | Path) -> list[str]:
@@ -169,8 +169,9 @@ class Task:
     def _run(self, args: list) -> Iterator:
         try:
             yield from self.call(self.program, args)
+            self.system.devices.release_task(self.number)  # normal end: detach, close files
         except StopProgram:
-            pass
+            self.system.devices.release_task(self.number)
         except ProgramError as err:
             self.error = self._locate(err, err.__traceback__)
             self.last_error = err.code
@@ -283,6 +284,8 @@ class Task:
     # ------------------------------------------------------------ settings
     def set_parameter(self, name: str, index, value) -> None:
         key = _pick(self.system.parameters, name)
+        if not in_range(key, values._real(value)):
+            raise values.fail(msg.ILLEGAL_VALUE, f"{key} = {value}")
         self.system.parameters[key] = values._real(value)
 
     def switch(self, name: str) -> bool:

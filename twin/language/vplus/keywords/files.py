@@ -1,0 +1,209 @@
+"""Logical-unit I/O: ATTACH, DETACH, FOPEN_, READ, WRITE, GETC, IOSTAT ...
+(V+ guide v17, "Input/Output Control"; the devices are in ../fileio.py).
+
+Each instruction takes `unit` (what its parentheses hold: lun, mode, record
+...) and `items` (what follows).  The outcome of every operation is stored as
+IOSTAT(lun); an I/O error never stops the program.
+"""
+
+from __future__ import annotations
+
+from .. import messages as msg
+from ..fileio import RETURN_LUN, TERMINAL_LUN, IoError
+from ..formats import render
+from .strings import leading_number
+from ..values import _str, fail, to_int
+from . import function, instruction
+
+ROBOT_LUN = 0
+
+
+def _arg(unit: tuple, i: int, default: int = 0) -> int:
+    return to_int(unit[i]) if len(unit) > i and unit[i] is not None else default
+
+
+def _devices(rt):
+    return rt.system.devices
+
+
+@instruction("ATTACH", returns_unit=True)
+def _attach(rt, unit: tuple, items: tuple):
+    """ATTACH (lun, mode) $device.  Mode 4 picks a free unit and returns it."""
+    mode = _arg(unit, 1)
+    device = _str(items[0]).strip().upper() if items else None
+    lun = unit[0] if unit else None
+    if lun is None and not mode & RETURN_LUN or lun is not None and to_int(lun) == ROBOT_LUN:
+        return None  # ATTACH () / (0): the robot; task 0 holds it from the start here
+    devices = _devices(rt)
+    if device is None:
+        device = "TERMINAL" if to_int(lun) == TERMINAL_LUN else "PENDANT"
+    if mode & RETURN_LUN:
+        try:
+            number = devices.free_lun(rt.number, device)
+        except IoError:
+            return None  # no unit free; IOSTAT of the old value of lun is unchanged
+    else:
+        number = to_int(lun)
+    devices.run(rt.number, number, devices.attach, device)
+    return float(number) if mode & RETURN_LUN else None
+
+
+@instruction("DETACH")
+def _detach(rt, unit: tuple, items: tuple):
+    lun = _arg(unit, 0)
+    if lun != ROBOT_LUN:
+        _devices(rt).run(rt.number, lun, _devices(rt).detach)
+
+
+def _opener(mode: str):
+    def fopen(rt, unit: tuple, items: tuple):
+        if not items:
+            raise fail(msg.INVALID_ARGUMENT, "file specification")
+        devices = _devices(rt)
+        devices.run(rt.number, _arg(unit, 0), devices.fopen, mode, _str(items[0]), _arg(unit, 1), _arg(unit, 2))
+
+    return fopen
+
+
+for _name, _mode in (("FOPENR", "R"), ("FOPENW", "W"), ("FOPENA", "A"), ("FOPEND", "D")):
+    instruction(_name)(_opener(_mode))
+
+
+@instruction("FCLOSE")
+def _fclose(rt, unit: tuple, items: tuple):
+    _devices(rt).run(rt.number, _arg(unit, 0), _devices(rt).fclose)
+
+
+@instruction("FDELETE")
+def _fdelete(rt, unit: tuple, items: tuple):
+    if not items:
+        raise fail(msg.INVALID_ARGUMENT, "file specification")
+    _devices(rt).run(rt.number, _arg(unit, 0), _devices(rt).fdelete, _str(items[0]))
+
+
+@instruction("FSEEK")
+def _fseek(rt, unit: tuple, items: tuple):
+    record = to_int(items[0]) if items else _arg(unit, 1)
+    _devices(rt).run(rt.number, _arg(unit, 0), _devices(rt).fseek, record)
+
+
+@instruction("FEMPTY")
+def _fempty(rt, unit: tuple, items: tuple):
+    # WRITE goes straight to the file: there is never a buffer to empty.
+    devices = _devices(rt)
+    devices.run(rt.number, _arg(unit, 0), devices.unit)
+
+
+@instruction("FSET")
+def _fset(rt, unit: tuple, items: tuple):
+    # Serial and terminal attributes (baud rate, parity...) change nothing on
+    # an in-memory line; windows are absent.
+    devices = _devices(rt)
+
+    def check(task, lun):
+        if devices.unit(task, lun).device == "DISK":
+            raise IoError(msg.ILLEGAL_IO_COMMAND)
+
+    devices.run(rt.number, _arg(unit, 0), check)
+
+
+@instruction("FCMND")
+def _fcmnd(rt, unit: tuple, items: tuple):
+    # Rename, format, mkdir, rmdir and DDCMP settings: their command numbers
+    # are in the Language Reference Guide, which we do not have.
+    devices = _devices(rt)
+
+    def refuse(task, lun):
+        devices.unit(task, lun)
+        raise IoError(msg.ILLEGAL_IO_COMMAND)
+
+    devices.run(rt.number, _arg(unit, 0), refuse)
+
+
+@instruction("WRITE")
+def _write(rt, unit: tuple, items: tuple):
+    """WRITE (lun, record) items: formatted like TYPE; CR LF ends the record unless /S."""
+    text, newline = render(items)
+    devices = _devices(rt)
+    devices.run(rt.number, _arg(unit, 0), devices.write, text, newline, _arg(unit, 1))
+
+
+@instruction("READ", waits=True, targets=True)
+def _read(rt, unit: tuple, kinds: tuple):
+    """READ (lun, record) var, ...: one record.  A single variable takes the
+    whole record (a real takes its leading number, as VAL does); several take
+    its comma- or space-separated fields in order.  A serial READ waits for a
+    whole line; after an error the variables keep their values."""
+    devices = _devices(rt)
+    lun, record = _arg(unit, 0), _arg(unit, 1)
+    while True:
+        text = devices.run(rt.number, lun, devices.read_record, record)
+        if text is not None or devices.iostat(rt.number, lun) < 0:
+            break
+        yield rt.SLICE  # a serial line without a whole line yet: wait for it
+    if text is None:
+        return [None] * len(kinds)
+    fields = [text] if len(kinds) == 1 else _fields(text, len(kinds))
+    return [f if kind == "s" else leading_number(f) for kind, f in zip(kinds, fields)]
+
+
+def _fields(text: str, count: int) -> list[str]:
+    parts = [p for p in text.replace(",", " ").split(" ") if p]
+    return (parts + [""] * count)[:count]
+
+
+@function("IOSTAT")
+def _iostat(rt, lun, select=None):
+    return _devices(rt).iostat(rt.number, to_int(lun), 0 if select is None else to_int(select))
+
+
+@function("GETC")
+def _getc(rt, lun, mode=None):
+    return float(_devices(rt).getc(rt.number, to_int(lun), bool(mode and to_int(mode))))
+
+
+@function("PENDANT")
+def _pendant(rt, select):
+    # No pendant is connected: no key is pressed, the speed bar is at rest and
+    # PENDANT(-3) matches none of the states 1-4, so the manuals' programs take
+    # their "busy or not connected" path.
+    to_int(select)
+    return 0.0
+
+
+# Hardware the twin's cell does not have: graphics windows (FOPEN, G*,
+# GETEVENT) act on units ATTACH could never open, so they report
+# *Not attached to logical unit* through IOSTAT; external encoders (SETDEVICE)
+# are absent.
+def _absent_window(rt, unit: tuple, items: tuple):
+    devices = _devices(rt)
+
+    def refuse(task, lun):
+        devices.unit(task, lun)
+        raise IoError(msg.ILLEGAL_IO_COMMAND)
+
+    devices.run(rt.number, _arg(unit, 0), refuse)
+
+
+for _name in ("FOPEN", "GARC", "GCHAIN", "GCLEAR", "GCLIP", "GCOLOR", "GCOPY", "GFLOOD", "GICON", "GLINE",
+              "GLINES", "GLOGICAL", "GPANEL", "GPOINT", "GRECTANGLE", "GSCAN", "GSLIDE", "GTEXTURE", "GTRANS",
+              "GTYPE"):
+    instruction(_name)(_absent_window)
+
+
+@instruction("GETEVENT", targets=True)
+def _getevent(rt, unit: tuple, kinds: tuple):
+    _absent_window(rt, unit, ())
+    return [None] * len(kinds)
+
+
+@instruction("SETDEVICE")
+def _setdevice(rt, unit: tuple, items: tuple):
+    raise fail(msg.DEVICE_NOT_READY, "no external encoder is installed")
+
+
+@instruction("KEYMODE")
+def _keymode(rt, mode, first, last=None):
+    # Key modes of a pendant that is not connected: nothing to change.
+    to_int(mode)
+
