@@ -190,7 +190,7 @@ def test_timer_counts_simulated_seconds_from_when_it_was_set():
 
 # ------------------------------------------------------------ TYPE / PROMPT
 @pytest.mark.parametrize("items, text", [
-    ("/I5, 42", "   42"), ("/I0, -7.6", "-8"), ("/F8.3, 3.14159", "   3.142"), ("/F0.1, 2.25", "2.2"),
+    ("/I5, 42", "   42"), ("/I0, -7.6", "-8"), ("/I0, 2.5", "3"), ("/F8.3, 3.14159", "   3.142"), ("/F0.1, 2.25", "2.2"),
     ("/E10.2, 1234.5", "  1.23E+03"), ("/G8.3, 0.5", "     0.5"), ("/H4, 255", "  FF"), ("/O4, 8", "  10"),
     ("/D, 2.5", "2.5"), ("/I2, 123", "**"), ("/X3, \"a\"", "   a"), ("/B", "\a"), ("/U2", "\x1bM\x1bM"),
     ("/C2, \"a\"", "\n\na"), ("/I3, 1, 2", "  1  2"), ("\"a\", /N", "a"),
@@ -351,3 +351,14 @@ def test_unknown_argument_types_stop_the_program():
     assert error_of('x = LEN(5)').code == msg.WRONG_TYPE
     assert error_of('x = IOSTAT("a")').code == msg.WRONG_TYPE
     assert math.isclose(run_ok("x = VAL(\"1e3\")").globals["x"], 1000.0)
+
+
+def test_cas_sets_only_when_the_value_matches():
+    out = output_of(program("lock = 0\nTYPE CAS(lock, 0, 5), lock, CAS(lock, 0, 9), lock"))
+    assert out == "0555\n"
+
+
+def test_analog_io_is_absent():
+    # [000] L7363-7378: IF AIO.INS(4) THEN AIO.OUT 4 = 0.56 END -- no board here.
+    assert output_of(program("IF AIO.INS(4) THEN\nAIO.OUT 4 = 0.56\nEND\nTYPE \"skipped\"")) == "skipped\n"
+    assert error_of("x = AIO.IN(1004)").code == msg.DEVICE_NOT_READY

@@ -64,7 +64,9 @@ def run_program(
 
     sim = Simulation(scene, seed=seed)
     sim.recorder = _open_recorder(sim, rrd_path)
-    system = VPlusSystem(sim.controller, sim.io, sim.clock, console=console, seed=sim.cell.seed)
+    # The program's disk (ATTACH "DISK") is a folder beside the report.
+    sandbox = Path(report_path).parent / "sandbox" if report_path is not None else None
+    system = VPlusSystem(sim.controller, sim.io, sim.clock, console=console, seed=sim.cell.seed, sandbox=sandbox)
     for name, location in sim.taught_locations().items():
         system.define_location(name, location)
     names = system.load(program)

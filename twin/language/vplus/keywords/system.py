@@ -143,6 +143,29 @@ def _tas(rt, value, new):
     return value, float(new)
 
 
+@function("CAS", writes_first=True)
+def _cas(rt, value, test, new):
+    """CAS(var, test, new): the old value; var becomes `new` only if it equalled `test`."""
+    return value, (float(new) if value == test else value)
+
+
+# ---- analog I/O: the twin's cell has no analog board
+@function("AIO.INS")
+def _aio_ins(rt, channel):
+    to_int(channel)
+    return FALSE
+
+
+@function("AIO.IN")
+def _aio_in(rt, channel):
+    raise fail(msg.DEVICE_NOT_READY, f"no analog input {to_int(channel)} is installed")
+
+
+@instruction("AIO.OUT")
+def _aio_out(rt, value, channel):
+    raise fail(msg.DEVICE_NOT_READY, f"no analog output {to_int(channel)} is installed")
+
+
 @function("$ID")
 def _id_text(rt, *args):
     return SYSTEM_ID
