@@ -69,6 +69,14 @@ def test_pack_and_unpack():
     assert out == "abXYef| q  |bXY\n"
 
 
+def test_pack_and_unpack_span_128_character_elements():
+    # A string array is read as consecutive 128-character strings.
+    system = run_ok('PACK $a[3], 127, 4 = "wxyz"\n$s = $UNPACK($a[3], 126, 6)\n$t = $UNPACK($a[4], 1, 2)')
+    a = system.globals["$a[]"]
+    assert a[3] == " " * 126 + "wx" and a[4] == "yz"
+    assert system.globals["$s"] == " wxyz " and system.globals["$t"] == "yz"
+
+
 def test_binary_conversions_round_trip_big_endian():
     out = output_of(program(
         'TYPE INTB($INTB(-2)), " ", LNGB($LNGB(123456789)), " ", FLTB($FLTB(1.5)), " ", DBLB($DBLB(0.1))\n'

@@ -19,7 +19,8 @@ from . import messages as msg
 from .keywords import INSTRUCTIONS, NAME_ARGUMENTS, WRITES_FIRST_ARGUMENT
 
 FORMAT_ARGUMENTS = {"$ENCODE"}  # arguments are TYPE items: expressions and /I0, /F8.3 ...
-LIBRARY_CALLS = WRITES_FIRST_ARGUMENT | NAME_ARGUMENTS | FORMAT_ARGUMENTS  # filled when the keywords load
+ARRAY_ARGUMENTS = {"$UNPACK"}  # the first argument $a[i] is passed as (array, index)
+LIBRARY_CALLS = WRITES_FIRST_ARGUMENT | NAME_ARGUMENTS | FORMAT_ARGUMENTS | ARRAY_ARGUMENTS
 
 
 class LibraryStatements:
@@ -104,6 +105,13 @@ class LibraryStatements:
     def library_call(self, e: ast.Call) -> str:
         if e.name in FORMAT_ARGUMENTS:
             return f"F[{e.name!r}](rt{''.join(', ' + self.io_item(a) for a in e.args)})"
+        if e.name in ARRAY_ARGUMENTS:
+            first = e.args[0] if e.args else None
+            if not isinstance(first, ast.Var) or not first.indices:
+                raise ProgramError(msg.message(msg.INVALID_ARGUMENT) + f" {e.name} needs an array element",
+                                   msg.INVALID_ARGUMENT)
+            rest = "".join(", " + ("None" if a is None else self.expr(a)) for a in e.args[1:])
+            return f"F[{e.name!r}](rt, {self.array_ref(first)}{rest})"
         if e.name in NAME_ARGUMENTS:
             # A bare name is the name itself; anything else (a string) is evaluated.
             args = [repr(a.name.upper()) if isinstance(a, ast.Var) and a.indices is None

@@ -94,24 +94,41 @@ def _truncate(rt, text):
     return _str(text).split("\0", 1)[0]
 
 
+# PACK and $UNPACK see a string array as one long string made of 128-character
+# elements: $a[i] holds characters 1-128 counted from element i, $a[i+1] the
+# next 128, and so on (V+ guide v17 "String-Related Functions": "an array of
+# 128-character string variables").  Short or missing elements read as blanks.
+def _span(first, count) -> tuple[int, int]:
+    begin, size = _position(first, ""), to_int(count)
+    if size < 0 or size > MAX_STRING:
+        raise fail(msg.ILLEGAL_VALUE, f"{size} characters")
+    return begin, size
+
+
 @function("$UNPACK")
-def _unpack(rt, element, first, count):
-    """$UNPACK($a[i], first, count): characters of one array element (the
-    element's value; a span over several elements is not supported)."""
-    begin = _position(first, element)
-    return _str(element)[begin : begin + to_int(count)]
+def _unpack(rt, target, first, count):
+    """$UNPACK($a[i], first, count): `count` characters from position `first`."""
+    array, index = target
+    begin, size = _span(first, count)
+    out = []
+    for offset in range(begin, begin + size):
+        element = array.get(index + offset // MAX_STRING, "")
+        position = offset % MAX_STRING
+        out.append(element[position] if position < len(element) else " ")
+    return "".join(out)
 
 
 @instruction("PACK", targets=True)
 def _pack(rt, value, target, first, count):
-    """PACK $a[i], first, count = $s: write `count` characters of $s into the
-    array element at position `first`, padding the element with blanks."""
+    """PACK $a[i], first, count = $s: write `count` characters of $s (blank-
+    padded) at position `first`, into the following elements if need be."""
     array, index = target
-    text = array.get(index, "") if index is not None else ""
-    begin, size = _position(first, text), to_int(count)
+    begin, size = _span(first, count)
     piece = _str(value)[:size].ljust(size)
-    text = text.ljust(begin)
-    array[index] = (text[:begin] + piece + text[begin + size :])[:MAX_STRING]
+    for k, char in enumerate(piece):
+        slot, position = index + (begin + k) // MAX_STRING, (begin + k) % MAX_STRING
+        element = array.get(slot, "").ljust(position)
+        array[slot] = element[:position] + char + element[position + 1 :]
 
 
 # ---- binary conversions: bytes of a string <-> numbers
