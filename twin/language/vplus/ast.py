@@ -158,6 +158,16 @@ class Speed(Statement):
 
 
 @dataclass
+class ExecuteProgram(Statement):
+    """EXECUTE [task] program(args)[, cycles[, step]]."""
+
+    task: Expr | None
+    name: str
+    args: list[Expr | None]
+    options: list[Expr | None]  # cycles, step
+
+
+@dataclass
 class Instruction(Statement):
     """Any other keyword statement: MOVE pick, APPRO pick, 25, OPENI, SIGNAL 1 ..."""
 

@@ -40,10 +40,26 @@ from . import ast
 from . import messages as msg
 from .compile_library import LIBRARY_CALLS, LibraryStatements
 from .keywords import FUNCTIONS, INSTRUCTIONS, STRING_FUNCTIONS
+from .parser import normalize_name
 
 # A time slice: loops hand the CPU back to the scheduler every this many
 # iterations, as the V+ scheduler preempts a task at the end of its slice.
 SLICE_ITERATIONS = 1024
+
+# Program-interrupt and task instructions, carried out by the task itself
+# (tasking.TaskControl): keyword -> (method of rt, whether it may wait).
+_TASK_INSTRUCTIONS = {
+    "LOCK": ("lock", True), "IGNORE": ("ignore", False), "ABORT": ("abort", False),
+    "KILL": ("kill", False), "CYCLE.END": ("cycle_end", False), "PAUSE": ("pause", True),
+    "SET.EVENT": ("set_event", False), "CLEAR.EVENT": ("clear_event", False),
+    "WAIT.EVENT": ("wait_event", True), "RELEASE": ("release", True),
+}
+_TASK_FUNCTIONS = {"PRIORITY": "priority", "TASK": "task_info", "GET.EVENT": "get_event"}
+# Block statements and steps that only steer the flow are not wrapped for the
+# error trap (REACTE): an error trap resumes at the step after a failing one.
+_UNTRAPPED = (ast.If, ast.For, ast.While, ast.DoUntil, ast.Case, ast.Declare, ast.LabelOnly)
+
+_FLOW = {"RETURN", "RETURNE", "EXIT", "NEXT", "STOP", "HALT"}
 
 _RELATIONAL = {"==": "==", "<>": "!=", "<": "<", "<=": "<=", ">": ">", ">=": ">="}
 _ARITH = {"+": "+", "-": "-", "*": "*", "/": "/"}
@@ -270,6 +286,8 @@ class ProgramCompiler(LibraryStatements):
         if isinstance(e, ast.Str):
             return repr(e.value)
         if isinstance(e, ast.Var):
+            if e.indices is None and e.name.upper() in _TASK_FUNCTIONS:
+                return f"rt.{_TASK_FUNCTIONS[e.name.upper()]}()"
             if e.indices is None and e.name.upper() in FUNCTIONS and not e.name.startswith("#"):
                 return self.call(ast.Call(e.name.upper(), []))
             if e.indices is None and e.name.upper() in STRING_FUNCTIONS:
@@ -333,6 +351,8 @@ class ProgramCompiler(LibraryStatements):
     def call(self, e: ast.Call) -> str:
         if e.name == "DEFINED":
             return self.defined(e)
+        if e.name in _TASK_FUNCTIONS:
+            return f"rt.{_TASK_FUNCTIONS[e.name]}({self.arguments(e.args)})"
         if e.name in LIBRARY_CALLS:
             return self.library_call(e)  # $DECODE, TAS, PARAMETER(name): see compile_library.py
         table = STRING_FUNCTIONS if e.name.startswith("$") else FUNCTIONS
@@ -366,7 +386,16 @@ class ProgramCompiler(LibraryStatements):
         handler = getattr(self, "s_" + type(s).__name__, None)
         if handler is None:
             raise self.error(s, msg.UNKNOWN_KEYWORD, type(s).__name__)
-        handler(s, depth)
+        if isinstance(s, _UNTRAPPED) or (isinstance(s, ast.Instruction) and s.name in _FLOW):
+            handler(s, depth)
+            return
+        # A step's error goes to the task's REACTE routine, if it has one; the
+        # try costs nothing until something raises (Python 3.11).
+        self.emit(depth, "try:")
+        handler(s, depth + 1)
+        self.current = s
+        self.emit(depth, "except _TRAPPED as _error:")
+        self.emit(depth + 1, "yield from rt.trap(_error)")
 
     def s_Assign(self, s: ast.Assign, depth: int) -> None:
         if s.target.name.startswith("$") != is_string(s.value) and not isinstance(s.value, ast.Call):
@@ -699,18 +728,32 @@ class ProgramCompiler(LibraryStatements):
         rotation = self.expr(s.rotation) if s.rotation is not None else "None"
         self.emit(depth, f"rt.set_speed({self.expr(s.value)}, {rotation}, {tuple(s.modifiers)!r})")
 
+    def arguments(self, args: list) -> str:
+        return ", ".join("None" if a is None else self.expr(a) for a in args)
+
     def s_Instruction(self, s: ast.Instruction, depth: int) -> None:
         name = s.name
-        if name == "RETURN":
+        if name in ("RETURN", "RETURNE"):  # RETURNE: an error trap goes on after the failed step
             self.emit_return(depth)
             return
         if name in ("EXIT", "NEXT"):
             self.loop_control(s, depth)
             return
-        if name == "WAIT" and s.args:
-            # WAIT expr re-evaluates the condition each scheduling cycle.
+        if name == "WAIT":
+            if not s.args:  # sleep until the next major cycle ([000] L1435-1437)
+                self.emit(depth, "yield rt.NEXT_CYCLE")
+                return
+            # WAIT expr: "a release to anyone if the expression is FALSE" ([000] L1437-1438).
             self.emit(depth, f"while not {self.condition(s.args[0])}:")
-            self.emit(depth + 1, "yield rt.SLICE")
+            self.emit(depth + 1, "yield rt.RELEASE")
+            return
+        if name in ("REACT", "REACTI", "REACTE"):
+            self.reaction(s, depth)
+            return
+        if name in _TASK_INSTRUCTIONS:
+            method, waits = _TASK_INSTRUCTIONS[name]
+            call = f"rt.{method}({self.arguments(s.args)})"
+            self.emit(depth, f"yield from {call}" if waits else call)
             return
         spec = INSTRUCTIONS.get(name)
         if spec is None:
@@ -721,6 +764,39 @@ class ProgramCompiler(LibraryStatements):
             args = ", ".join("None" if a is None else self.expr(a) for a in s.args)
         call = f"I[{name!r}](rt{', ' if args else ''}{args})"
         self.emit(depth, f"yield from {call}" if spec.waits else call)
+
+
+    def reaction(self, s: ast.Instruction, depth: int) -> None:
+        """REACT[I] signal, program(args)[, priority] and REACTE program: the
+        program is named, not evaluated; its arguments are passed by value."""
+        position = 0 if s.name == "REACTE" else 1
+        if len(s.args) <= position or s.args[position] is None:
+            if s.name == "REACTE":  # REACTE alone: no error trap any more
+                self.emit(depth, "rt.react_error(None)")
+                return
+            raise self.error(s, msg.INVALID_ARGUMENT, f"{s.name} needs a program")
+        target = s.args[position]
+        if isinstance(target, ast.Var) and target.indices is None:
+            name, args = target.name, []
+        elif isinstance(target, ast.Call):
+            name, args = normalize_name(target.name), target.args
+        else:
+            raise self.error(s, msg.INVALID_ARGUMENT, f"{s.name} needs a program name")
+        if s.name == "REACTE":
+            self.emit(depth, f"rt.react_error({name!r})")
+            return
+        rest = s.args[2:]
+        priority = "None" if not rest or rest[0] is None else self.expr(rest[0])
+        signal = self.expr(s.args[0]) if s.args[0] is not None else "None"
+        self.emit(depth, f"rt.react({signal}, {name!r}, [{self.arguments(args)}], {priority}, "
+                         f"immediate={s.name == 'REACTI'})")
+
+    def s_ExecuteProgram(self, s: ast.ExecuteProgram, depth: int) -> None:
+        """EXECUTE [task] program(args)[, cycles[, step]]: arguments by value."""
+        task = "None" if s.task is None else self.expr(s.task)
+        options = self.arguments(s.options)
+        self.emit(depth, f"rt.execute({task}, {s.name!r}, [{self.arguments(s.args)}]"
+                         f"{', ' if options else ''}{options})")
 
 
 def compile_program(program: ast.Program) -> CompiledProgram:

@@ -32,6 +32,8 @@ UNDEFINED_LABEL = -453  # (LRG)
 UNKNOWN_KEYWORD = -454  # (LRG)
 LOCATION_OUT_OF_RANGE = -610  # (LRG)
 ROBOT_NOT_ATTACHED = -601  # (LRG)
+ROBOT_ATTACHED = -602  # twin-chosen: ATTACH of a robot another task holds
+TASK_RUNNING = -420  # twin-chosen: EXECUTE or KILL of a task that is executing
 COLLISION = -1020  # twin-defined: the real controller does not see the cell
 JOINT_LIMIT = -1021  # twin-defined code; text as the controller prints it, "*Joint N limit stop*"
 STRAIGHT_LINE_CONFIG = -1022  # twin-defined code for the controller's configuration-change refusal
@@ -79,6 +81,8 @@ MESSAGES: dict[int, str] = {
     UNKNOWN_KEYWORD: "*Unknown instruction*",
     LOCATION_OUT_OF_RANGE: "*Location out of range*",
     ROBOT_NOT_ATTACHED: "*Robot not attached to this program*",
+    ROBOT_ATTACHED: "*Robot already attached to a program*",
+    TASK_RUNNING: "*Program already executing*",
     COLLISION: "*Collision detected*",
     JOINT_LIMIT: "*Joint limit stop*",
     STRAIGHT_LINE_CONFIG: "*Straight-line motion can't alter configuration*",

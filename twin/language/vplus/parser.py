@@ -213,6 +213,10 @@ class _ToAst(Transformer):
         value, rotation, *mods = children
         return ast.Speed(value, rotation, [str(m).upper() for m in mods], **_pos(meta))
 
+    def execute_statement(self, meta, children):
+        task, name, args, options = children
+        return ast.ExecuteProgram(task, normalize_name(str(name)), args, options or [], **_pos(meta))
+
     def instruction(self, meta, children):
         return ast.Instruction(str(children[0]).upper(), children[1], **_pos(meta))
 

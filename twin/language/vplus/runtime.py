@@ -13,11 +13,12 @@ import sys
 import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Iterator, TextIO
+from typing import Callable, TextIO
 
 import numpy as np
 
 from ...controller.location import Location
+from ...controller.scheduler import NEXT_CYCLE, RELEASE
 from ...errors import ProgramError
 from . import messages as msg
 from . import values
@@ -28,13 +29,10 @@ from .keywords import FUNCTIONS, INSTRUCTIONS, STRING_FUNCTIONS
 from .parser import normalize_name, parse, parse_file
 # Parameters and switches with the manuals' defaults and limits.
 from .settings import PARAMETER_DEFAULTS, SWITCH_DEFAULTS, in_range
+from .tasking import HaltProgram, StopProgram, TaskControl
 
 MAJOR_CYCLE = 0.016  # s: the V+ scheduler's major cycle and trajectory period
 MAX_CALL_DEPTH = 200  # "*Too many subroutine calls*" past this many nested CALLs
-
-
-class StopProgram(Exception):
-    """STOP, HALT or RETURN from the top-level program: the task ends normally."""
 
 
 def parse_real(text: str) -> float:
@@ -97,7 +95,8 @@ class VPlusSystem:
         self.parameters = dict(PARAMETER_DEFAULTS)
         self.switches = dict(SWITCH_DEFAULTS)
         self.random = np.random.default_rng(seed)
-        self.tasks: list[Task] = []
+        self.tasks: list[Task] = []  # every task started, in order; `task(n)` finds the current one
+        self.robot_holder: Task | None = None  # the task the robot is attached to
         # Logical units; disk files live in `sandbox` (no disk when it is None).
         self.devices = Devices(sandbox, self.console)
         self.timers: dict[int, float] = {}  # TIMER n = value: the clock reading that timer n counts from
@@ -130,56 +129,72 @@ class VPlusSystem:
         self.globals[normalize_name(name)] = location
 
     # ------------------------------------------------------------ tasks
-    def start(self, program: str, number: int = 0, args: list | None = None) -> "Task":
+    def start(self, program: str, number: int = 0, args: list | None = None, cycles: int = 1) -> "Task":
+        """EXECUTE: run `program` in task `number` (`cycles` < 0: for ever)."""
         name = normalize_name(program)
         if name not in self.programs:
             raise ProgramError(f"{msg.message(msg.UNDEFINED_PROGRAM)} {program}", msg.UNDEFINED_PROGRAM)
-        task = Task(self, number, name, args or [])
+        running = self.task(number)
+        if running is not None and not running.finished:
+            raise values.fail(msg.TASK_RUNNING, f"task {number}")
+        task = Task(self, number, name, args or [], cycles)
         self.tasks.append(task)
         return task
 
+    def task(self, number: int) -> "Task | None":
+        """The task most recently started under `number`."""
+        for task in reversed(self.tasks):
+            if task.number == number:
+                return task
+        return None
+
+    def proceed(self, number: int = 0) -> None:
+        """PROCEED: a paused task goes on after its PAUSE."""
+        task = self.task(number)
+        if task is None or task.finished or not task.paused:
+            raise values.fail(msg.ILLEGAL_OPERATION, f"task {number} is not paused")
+        task.paused = False
+
 
 class _Slice:
-    """Yielded at the end of a time slice: resume at the next major cycle."""
+    """Yielded when a task has used up its 1 ms time slice: it goes on in a later slice."""
 
     def __repr__(self) -> str:
         return "SLICE"
 
 
-class Task:
+class Task(TaskControl):
     """One V+ task running a program.  `rt` in the generated code."""
 
     SLICE = _Slice()
+    RELEASE = RELEASE
+    NEXT_CYCLE = NEXT_CYCLE
 
-    def __init__(self, system: VPlusSystem, number: int, program: str, args: list):
+    def __init__(self, system: VPlusSystem, number: int, program: str, args: list, cycles: int = 1):
         self.system = system
         self.number = number
         self.program = program
         self.globals = system.globals
-        self.robot = system.robot
         self.io = system.io
         self.random = system.random
         self.depth = 0
         self.last_error: int | None = None
         self.error: ProgramError | None = None
         self.finished = False
-        self.generator = self._run(args)
+        self.init_control(cycles)
+        self.generator = self._drive(args)
 
-    # ------------------------------------------------------------ running
-    def _run(self, args: list) -> Iterator:
-        try:
-            yield from self.call(self.program, args)
-            self.system.devices.release_task(self.number)  # normal end: detach, close files
-        except StopProgram:
-            self.system.devices.release_task(self.number)
-        except ProgramError as err:
-            self.error = self._locate(err, err.__traceback__)
-            self.last_error = err.code
-        except (KeyError, NameError, ZeroDivisionError, TypeError, IndexError) as err:
-            self.error = self._translate(err)
-            self.last_error = self.error.code
-        finally:
-            self.finished = True
+    @property
+    def robot(self):
+        """The robot; a task that does not hold it may read it but not move it."""
+        robot = self.system.robot
+        if robot is None or self.system.robot_holder is self:
+            return robot
+        return _RobotOfAnotherTask(robot, self)
+
+    def ended(self) -> None:
+        """The task ended without an error: detach its units and close its files."""
+        self.system.devices.release_task(self.number)
 
     def _frames(self, tb) -> list[tuple[CompiledProgram, int]]:
         found = []
@@ -245,7 +260,8 @@ class Task:
     def stop(self) -> None:
         raise StopProgram()
 
-    halt = stop
+    def halt(self) -> None:
+        raise HaltProgram()
 
     # ------------------------------------------------------------ time
     def sleep(self, seconds: float):
@@ -300,6 +316,24 @@ class Task:
                              units="MMPS" if "MMPS" in modifiers else "IPS" if "IPS" in modifiers else None)
 
 
+class _RobotOfAnotherTask:
+    """The robot as seen by a task it is not attached to: reading it (HERE,
+    DEST, SPEED()) is fine; the first motion attaches it to task 0, and in
+    any other task is "*Robot not attached to this program*" ([000] L899-930)."""
+
+    _MOTION = {"move", "dwell", "wait_stopped", "hand", "hand_at_next_motion", "request_configuration",
+               "set_speed"}
+
+    def __init__(self, robot, task: Task):
+        self._robot = robot
+        self._task = task
+
+    def __getattr__(self, name: str):
+        if name in self._MOTION:
+            return getattr(self._task.robot_for_motion(), name)
+        return getattr(self._robot, name)
+
+
 def _source_line(file: str, line: int) -> str | None:
     try:
         return Path(file).read_text(encoding="latin-1").splitlines()[line - 1]
@@ -312,5 +346,7 @@ _NAMESPACE = {
     "F": {**FUNCTIONS, **STRING_FUNCTIONS},
     "I": {name: spec.function for name, spec in INSTRUCTIONS.items()},
     "_fmt": _fmt,
+    # What a step may raise that the error trap (REACTE) catches.
+    "_TRAPPED": (ProgramError, KeyError, NameError, ZeroDivisionError, TypeError, IndexError),
     **{name: getattr(values, name) for name in dir(values) if name.startswith("_") and not name.startswith("__")},
 }

@@ -1,0 +1,370 @@
+"""V+ multitasking and program interrupts: EXECUTE, ABORT, KILL, PAUSE,
+cycles, the time-sliced scheduler, REACT/LOCK/IGNORE, REACTE/RETURNE, event
+flags and robot attachment.
+
+[000] is the V+ Language User's Guide v17, [001] the eV+ Language User's Guide
+(../shared/seeds/); line numbers cite them.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from twin.controller.scheduler import RELEASE, SLICES, Scheduler
+from twin.language.vplus import messages as msg
+from twin.language.vplus.tasking import slice_priorities
+
+from vplus_helpers import output_of, run_vplus
+
+
+def program(body: str, name: str = "t", params: str = "") -> str:
+    return f".PROGRAM {name}({params})\n{body}\n.END\n"
+
+
+# ---------------------------------------------------------------- scheduler
+class Busy:
+    """A compute-bound task: uses up every slice it is given and logs it."""
+
+    SLICE = object()
+
+    def __init__(self, name: str, priorities, log: list, waits_after: int | None = None):
+        self.name, self.priorities, self.log = name, tuple(priorities), log
+        self.finished = False
+        self.generator = self._run(waits_after)
+
+    def _run(self, waits_after):
+        runs = 0
+        while True:
+            self.log.append(self.name)
+            runs += 1
+            if waits_after is not None and runs >= waits_after:
+                yield lambda: False  # blocked for good
+            yield self.SLICE
+
+
+def test_default_slice_priorities_share_a_cycle_between_tasks_0_and_1():
+    """[000] L1960-2075 "Default Task Priorities": in slices 0-12 the task with
+    the higher priority of the slice runs (task 1 has 21/11 where task 0 has
+    20/10, and 19/9 elsewhere); in slices 13-15 both have priority 0 and take
+    turns."""
+    log: list = []
+    scheduler = Scheduler()
+    scheduler.add(Busy("0", slice_priorities(0), log))
+    scheduler.add(Busy("1", slice_priorities(1), log))
+    scheduler.run_cycle()
+    assert "".join(log) == "0011001100110" + "101"
+
+
+def test_a_higher_priority_task_locks_out_a_lower_one_until_it_waits():
+    """[000] L1440-1446: a task that never waits locks out lower-priority tasks
+    in its slices; when it waits, the search goes on in the same slice."""
+    log: list = []
+    scheduler = Scheduler()
+    scheduler.add(Busy("low", [10] * SLICES, log))
+    scheduler.add(Busy("high", [20] * SLICES, log, waits_after=3))
+    scheduler.run_cycle()
+    assert log[:4] == ["high", "high", "high", "low"]
+    assert log.count("low") == SLICES - 2
+
+
+def test_equal_priorities_form_a_round_robin_group():
+    """[000] L1410-1416: among equal priorities the least recently run goes first."""
+    log: list = []
+    scheduler = Scheduler()
+    for name in "abc":
+        scheduler.add(Busy(name, [15] * SLICES, log))
+    scheduler.run_cycle()
+    assert "".join(log) == "abc" * 5 + "a"
+
+
+def test_priority_zero_runs_only_when_nothing_else_is_ready_and_minus_one_never():
+    """[000] L1386-1390: priority 0 only if no other task of the slice is
+    ready; -1 never, even if no other task is ready."""
+    log: list = []
+    scheduler = Scheduler()
+    scheduler.add(Busy("idle", [0] * SLICES, log))
+    scheduler.add(Busy("never", [-1] * SLICES, log))
+    scheduler.add(Busy("main", [10] * 8 + [-1] * 8, log))
+    scheduler.run_cycle()
+    assert "".join(log) == "main" * 8 + "idle" * 8
+
+
+def test_release_hands_the_slice_to_the_next_ready_task():
+    log: list = []
+
+    class Releasing(Busy):
+        def _run(self, waits_after):
+            while True:
+                self.log.append(self.name)
+                yield RELEASE
+
+    scheduler = Scheduler()
+    scheduler.add(Releasing("r", [20] * SLICES, log))
+    scheduler.add(Busy("b", [10] * SLICES, log))
+    scheduler.run_cycle()
+    assert "".join(log[:4]) == "rbrb"
+
+
+# ---------------------------------------------------------------- tasks
+def test_execute_starts_a_task_that_signals_back():
+    """Tasks synchronise with soft signals and WAIT SIG(...) ([000] L882-975;
+    digest 10.4)."""
+    text = program("""
+SIGNAL -2001
+EXECUTE 1 worker(5)
+WAIT SIG(2001)
+TYPE "worker counted ", count, " in task ", TASK(0)
+""", name="main") + program("""
+count = 0
+FOR i = 1 TO n
+  count = count + 1
+  WAIT
+END
+SIGNAL 2001
+""", name="worker", params="n")
+    system, task = run_vplus(text)
+    assert task.error is None
+    assert system.console.output == "worker counted 5 in task 0\n"
+    worker = system.task(1)
+    assert worker.program == "worker" and worker.finished and worker.error is None
+
+
+def test_bare_wait_sleeps_until_the_next_major_cycle():
+    """[000] L1435-1437: WAIT with no argument suspends the task until slice 0
+    of the next major cycle."""
+    system, task = run_vplus(program("FOR i = 1 TO 10\n  WAIT\nEND"))
+    assert task.error is None
+    # Ten WAITs: the program ends in the 11th cycle (cycle 10), after which the clock reads 11 cycles.
+    assert system.clock() == pytest.approx(11 * 0.016)
+
+
+def test_execute_cycles_and_stop_restart_the_program():
+    """[000] L4574-4580: STOP ends the cycle; with cycles left the program
+    starts again at its first step."""
+    text = program("""
+EXECUTE 2 counter(), 3
+WAIT TASK(1, 2) == 0
+TYPE "count ", count
+""", name="main") + program("""
+IF NOT DEFINED(count) THEN
+  count = 0
+END
+count = count + 1
+STOP
+count = 1000
+""", name="counter")
+    assert output_of(text) == "count 3\n"
+
+
+def test_task_states_pause_proceed_and_abort():
+    """TASK(1, n): 1 running, 2 paused, 0 idle; PAUSE waits for PROCEED
+    ([000] L4584-4590); ABORT stops a task ([000] L4455-4470)."""
+    text = program("""
+EXECUTE 1 pauser()
+WAIT TASK(1, 1) == 2
+TYPE "paused: ", TASK(1, 1)
+WAIT resumed
+TYPE "resumed: ", TASK(1, 1)
+EXECUTE 2 spinner()
+WAIT
+ABORT 2
+WAIT
+WAIT
+TYPE "aborted: ", TASK(1, 2)
+""", name="main") + program("""
+resumed = FALSE
+PAUSE
+resumed = TRUE
+WAIT.EVENT , 1
+""", name="pauser") + program("""
+DO
+  WAIT
+UNTIL FALSE
+""", name="spinner")
+    proceeded = []
+
+    def each_cycle(system):
+        pauser = system.task(1)
+        if pauser is not None and pauser.paused and not proceeded:
+            proceeded.append(system.clock())
+            system.proceed(1)
+
+    system, task = run_vplus(text, each_cycle=each_cycle)
+    assert task.error is None
+    assert system.console.output == "paused: 2\nresumed: 1\naborted: 0\n"
+    assert system.task(2).finished and system.task(2).error is None
+
+
+def test_a_paused_task_alone_ends_the_run_until_proceed():
+    system, task = run_vplus(program("PAUSE\nTYPE \"after\""))
+    assert not task.finished and task.paused and system.console.output == ""
+
+
+def test_execute_of_a_running_task_is_an_error():
+    text = program("""
+EXECUTE 1 spinner()
+EXECUTE 1 spinner()
+""", name="main") + program("10 WAIT\nGOTO 10", name="spinner")
+    system, task = run_vplus(text, max_cycles=20)
+    assert task.error.code == msg.TASK_RUNNING and (task.error.line, task.error.step) == (4, 4)
+
+
+def test_kill_clears_a_paused_task_but_not_a_running_one():
+    text = program("""
+EXECUTE 1 pauser()
+WAIT TASK(1, 1) == 2
+KILL 1
+TYPE "killed: ", TASK(1, 1)
+EXECUTE 2 spinner()
+KILL 2
+""", name="main") + program("PAUSE\nTYPE \"never\"", name="pauser") + program("10 WAIT\nGOTO 10", name="spinner")
+    system, task = run_vplus(text, max_cycles=50)
+    assert system.console.output == "killed: 0\n"
+    assert task.error.code == msg.TASK_RUNNING and task.error.line == 8
+
+
+def test_event_flags_set_event_and_wait_event():
+    """WAIT.EVENT waits for the task's event flag, which SET.EVENT sets
+    ([000] L4476-4491); WAIT.EVENT , t is a t-second delay ([001] L4294)."""
+    text = program("""
+CLEAR.EVENT
+EXECUTE 3 setter()
+WAIT.EVENT 1
+TYPE "event at ", INT(TIMER(0) * 1000 + 0.5)
+""", name="main") + program("WAIT.EVENT , 0.1\nSET.EVENT 0", name="setter")
+    system, task = run_vplus(text)
+    assert task.error is None
+    assert system.console.output == "event at 112\n"
+
+
+# ---------------------------------------------------------------- reactions
+REACT_EXAMPLE = program("""
+; Look for a change in signal 1001 from "on" to "off".
+; Call subroutine "alarm" if a change is detected.
+; Set priority of "alarm" to 10 (default would be 1).
+REACT -1001, alarm, 10
+CALL step("a")
+CALL step("b")
+LOCK 20 ;Defer any REACTions to "alarm"
+CALL step("c")
+CALL step("d")
+LOCK 0 ;Allow REACTions
+CALL step("e")
+IGNORE -1001
+TYPE
+""", name="main") + program("""
+TYPE $name, /S
+WAIT.EVENT , 0.1
+""", name="step", params="$name") + program("""
+TYPE "!", PRIORITY, /S
+REACT -1001, alarm, 10 ;the reaction re-enables itself ([000] L4640)
+""", name="alarm")
+
+
+def drive_1001(edges: list[tuple[float, bool]]):
+    """Input 1001 follows `edges` (time, level) on simulated time."""
+
+    def each_cycle(system):
+        level = True
+        for time, value in edges:
+            if system.clock() >= time:
+                level = value
+        system.io.set(1001, level)
+
+    return each_cycle
+
+
+def test_react_example_of_the_manual_with_lock():
+    """[000] L4530-4560 (eV+ [001] L1320-1344): a transition during steps a/b
+    calls alarm at once, at its priority 10; one during LOCK 20 (steps c, d)
+    is deferred until LOCK 0, before step e.  (Each MOVE of the manual is a
+    0.1 s step here.)"""
+    system, task = run_vplus(REACT_EXAMPLE, setup=lambda s: s.io.set(1001, True),
+                             each_cycle=drive_1001([(0.05, False), (0.15, True), (0.25, False)]))
+    assert task.error is None
+    assert system.console.output == "a!10bcd!10e\n"
+    assert task.program_priority == 0
+
+
+def test_react_transition_is_seen_only_at_the_next_major_cycle_and_fires_once():
+    """[000] L4627-4628: the transition is detected at the next major cycle.
+    Without re-enabling, the reaction fires once."""
+    text = program("""
+REACT 2001, flag
+SIGNAL 2001
+TYPE "before ", DEFINED(fired)
+WAIT
+TYPE "after ", fired
+SIGNAL -2001
+WAIT
+SIGNAL 2001
+WAIT
+WAIT
+TYPE "once ", fired
+""", name="main") + program("IF NOT DEFINED(fired) THEN\n  fired = 0\nEND\nfired = fired + 1", name="flag")
+    assert output_of(text) == "before 0\nafter 1\nonce 1\n"
+
+
+def test_react_refuses_signals_the_manual_does_not_allow():
+    """[000] L4507: only 1001-1012 and 2001-2008 can be used for REACT."""
+    system, task = run_vplus(program("REACT 1013, t"))
+    assert task.error.code == msg.ILLEGAL_SIGNAL
+
+
+def test_reacte_calls_the_trap_and_returne_goes_on_after_the_failed_step():
+    """[000] L1334-1345, L4562-4572: with REACTE the error calls the trap
+    routine at program priority 254 instead of stopping the program;
+    RETURNE goes on with the step after the one that failed."""
+    text = program("""
+REACTE trouble
+TYPE "before"
+x = 1 / 0
+TYPE "after, priority ", PRIORITY
+y = undefined.var + 1
+TYPE "end"
+""", name="main") + program("""
+TYPE $ERROR(ERROR()), " at priority ", PRIORITY
+RETURNE
+""", name="trouble")
+    assert output_of(text) == ("before\n*Divide by zero* at priority 254\nafter, priority 0\n"
+                               "*Undefined value* at priority 254\nend\n")
+
+
+def test_without_reacte_an_error_stops_the_task_at_its_step():
+    system, task = run_vplus(program("TYPE 1\nx = 1 / 0\nTYPE 2"))
+    assert task.error.code == msg.DIVIDE_BY_ZERO and task.error.step == 3
+    assert system.console.output == "1\n"
+
+
+# ---------------------------------------------------------------- robot
+class RecordingRobot:
+    """Stands in for the virtual controller: records which motions it was asked for."""
+
+    def __init__(self):
+        self.moves: list = []
+
+    def move(self, location, straight):
+        self.moves.append(location)
+        yield lambda: True
+
+    def here(self):
+        return "here"
+
+
+def test_only_the_task_holding_the_robot_may_move_it():
+    """[000] L899-930, [001] L406-432: task 0 attaches the robot (eV+: on its
+    first motion keyword); another task that moves it gets
+    *Robot not attached to this program*."""
+    text = program("""
+MOVE TRANS(1, 2, 3)
+EXECUTE 1 intruder()
+WAIT TASK(1, 1) == 3
+TYPE "task 1 stopped: ", $ERROR(ERROR(1))
+""", name="main") + program("MOVE TRANS(4, 5, 6)", name="intruder")
+    robot = RecordingRobot()
+    system, task = run_vplus(text, robot=robot)
+    assert task.error is None
+    assert len(robot.moves) == 1
+    assert system.console.output == "task 1 stopped: *Robot not attached to this program*\n"
+    assert system.task(1).error.code == msg.ROBOT_NOT_ATTACHED
+    assert system.robot_holder is None  # the ended task 0 let the robot go
