@@ -468,3 +468,114 @@ def test_digital_io_fragment():
     assert task.error is None
     assert [system.io.sig(s) for s in (33, 34, 35)] == [True, False, True]
     assert (34, True) in system.io.changes and (34, False) in system.io.changes
+
+
+# [001] L4338-4466 "operatorcontrol" (eV+, T20 pendant), with the digest's errata
+# fixed: the stray END lines after the two CASE blocks (L4409-4411, L4432) are
+# removed and the wrapped string and statements (L4407-4408, L4426-4427,
+# L4436-4437) are re-joined.
+OPERATOR_CONTROL = r"""
+.PROGRAM operatorcontrol()
+    AUTO $p.title, $p.msg[15], $p.f[15], key, app.sel
+    AUTO pendant.lun
+
+    pendant.lun = 1
+
+; Attach to the Pendant
+
+    ATTACH (pendant.lun)
+
+; Verify ATTACH was successful
+
+    IF IOSTAT(pendant.lun) <> 1 THEN
+        TYPE "Pendant is either busy or not connected"
+        GOTO 100      ;ERROR
+    END
+
+    $prog.list[0] = "Cookie1"
+    $prog.list[1] = "Cookie2"
+    $prog.list[2] = "Cookie3"
+    $prog.list[3] = "Cookie4"
+    $prog.list[4] = "Cookie5"
+    prog.len = 5
+
+    key = -1
+    app.sel = 0
+    $p.title = ""
+    FOR i = 0 TO 10
+        $p.msg[i] = ""
+    END
+    FOR i = 0 TO 4
+        $p.f[i] = ""
+    END
+
+    $p.title = "Operator Control"
+    $p.msg[0] = "Select Option from buttons below"
+    $p.f[1] = "Apps"
+    $p.f[2] = "Status"
+    $p.f[3] = ""
+    $p.f[4] = ""
+
+PDNT.WRITE $p.title, $p.msg[], $p.f[1], $p.f[2], $p.f[3], $p.f[4]
+
+WHILE TRUE DO
+    KEYMODE 1, 4 = 0      ;Set Keymode of F keys detect next keypress
+    key = PENDANT(0)      ;Obtain Pressed key
+    CASE key OF
+        VALUE 1:          ;Apps pressed, continue to Screen 2
+            GOTO 10
+        VALUE 2:          ;Display Filler Notification
+            PDNT.NOTIFY "Status", "No Program Running" ;Obtain info of task 1 here
+    END
+END
+
+10 $p.title = "List of Applications"
+   $p.f[1] = "Run"
+   $p.f[2] = "Up"
+   $p.f[3] = "Down"
+   $p.f[4] = "Done"
+   FOR i = 0 TO 10
+       $p.msg[i] = ""
+   END
+   FOR i = 0 TO prog.len-1
+       IF i == app.sel THEN
+           $p.msg[i] = $p.msg[i]+"<center><u>"+$prog.list[i]+"</u></center>"
+       ELSE
+           $p.msg[i] = $p.msg[i]+"<center>"+$prog.list[i]+"</center>"
+       END
+   END
+
+PDNT.WRITE (prog.len) $p.title, $p.msg[], $p.f[1], $p.f[2], $p.f[3], $p.f[4]
+KEYMODE 1, 28 = 0
+WHILE TRUE DO
+    key = PENDANT(0)
+    CASE key OF
+        VALUE 1, 18:      ;F1 or OK
+            CALLS $prog.list[app.sel]()
+            GOTO 10 ;
+        VALUE 2, 17:      ;F2 or Up arrow
+            app.sel = (app.sel-1) MOD prog.len
+            GOTO 10
+        VALUE 3, 21:      ;F3 or Down arrow
+            app.sel = (app.sel+1) MOD prog.len
+            GOTO 10
+        VALUE 4:          ;F4
+            GOTO 90
+    END
+END
+
+    90  PDNT.CLEAR
+        DETACH (1)
+
+    100 RETURN
+
+.END
+"""
+
+
+def test_operator_control_without_a_pendant_says_so_and_returns():
+    """[001] L4338-4466: with no T20 connected, ATTACH (1) fails, the program
+    types its message and RETURNs without touching the pendant screens."""
+    system, task = run_vplus(OPERATOR_CONTROL)
+    assert task.error is None and task.finished
+    assert system.console.output == "Pendant is either busy or not connected\n"

@@ -139,9 +139,8 @@ class _ToAst(Transformer):
         return ast.Declare(scope, double, items, **_pos(meta))
 
     def decl_item(self, meta, children):
-        var = children[0]
         dims = [c for c in children[1:] if c is not None]
-        return (ast.Var(var.name), dims or None)
+        return (ast.Var(normalize_name(str(children[0]))), dims or None)
 
     def if_goto(self, meta, children):
         return ast.IfGoto(children[0], int(children[1]), **_pos(meta))

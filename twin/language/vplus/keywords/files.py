@@ -197,6 +197,16 @@ def _getevent(rt, unit: tuple, kinds: tuple):
     return [None] * len(kinds)
 
 
+def _no_pendant(rt, *args):
+    # The T20 pendant screens of eV+ ([001] "Programming the T20 Pendant"):
+    # with no pendant connected there is nothing to draw on.
+    raise fail(msg.DEVICE_NOT_READY, "no pendant is connected")
+
+
+for _name in ("PDNT.WRITE", "PDNT.NOTIFY", "PDNT.CLEAR"):
+    instruction(_name)(_no_pendant)
+
+
 @instruction("SETDEVICE")
 def _setdevice(rt, unit: tuple, items: tuple):
     raise fail(msg.DEVICE_NOT_READY, "no external encoder is installed")
