@@ -88,6 +88,8 @@ class Scheduler:
                 if self._resume(task):
                     break  # the task used up the slice
                 passed.add(id(task))
+            if not any(self._ready(t) for t in self.tasks):
+                break  # every task waits: nothing can change before the next cycle
 
     def _ready(self, task: Runnable) -> bool:
         if task.finished or getattr(task, "paused", False):
