@@ -370,3 +370,16 @@ def test_analog_io_is_absent():
     # [000] L7363-7378: IF AIO.INS(4) THEN AIO.OUT 4 = 0.56 END -- no board here.
     assert output_of(program("IF AIO.INS(4) THEN\nAIO.OUT 4 = 0.56\nEND\nTYPE \"skipped\"")) == "skipped\n"
     assert error_of("x = AIO.IN(1004)").code == msg.DEVICE_NOT_READY
+
+
+def test_attach_and_detach_of_unit_0_take_and_free_the_robot():
+    # [000] L899-930: DETACH (0) frees the robot, ATTACH (0) takes it back.
+    text = program("ATTACH (0)\nWAIT\nDETACH ()\nWAIT\nATTACH ()\nWAIT\nWAIT")
+    system, task = run_vplus(text, max_cycles=0)
+    scheduler = Scheduler()
+    scheduler.add(task)
+    holders = []
+    for _ in range(3):
+        scheduler.run_cycle()
+        holders.append(system.robot_holder)
+    assert holders == [task, None, task]

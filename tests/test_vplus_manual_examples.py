@@ -579,3 +579,68 @@ def test_operator_control_without_a_pendant_says_so_and_returns():
     system, task = run_vplus(OPERATOR_CONTROL)
     assert task.error is None and task.finished
     assert system.console.output == "Pendant is either busy or not connected\n"
+
+
+# [000] L8146-8190 second serial example; identical in [001] L3428-3466.
+DISPLAY = r"""
+.PROGRAM display()
+; ABSTRACT: Monitor a serial line and read data when
+; available
+
+AUTO $buffer, c, done, etx, ienod, line
+etx = 3 ;ASCII code for ETX character
+ienod = -526 ;Error code for no data
+ATTACH (line, 4) "SERIAL:1"
+IF IOSTAT(line) < 0 GOTO 90 ;Check for errors
+$buffer = "" ;Initialize buffer to empty
+done = FALSE ;Assert not done
+DO
+
+CLEAR.EVENT
+c = GETC(line,1) ;Read byte from the ser. line
+WHILE c == ienod DO ;While there is no data...
+
+WAIT.EVENT 1 ;Wait for an event
+CLEAR.EVENT
+c = GETC(line,1) ;Read byte from the ser. line
+
+END
+IF c < 0 GOTO 90 ;Check for errors
+IF c == etx THEN ;If ETX seen...
+
+TYPE $buffer, /N ;Type buffer
+done = (LEN($buffer) == 0) ;Done if buffer length is 0
+$buffer = "" ;Set buffer to empty
+
+ELSE
+$buffer = $buffer+$CHR(c) ;Append next byte
+;to buffer
+END
+UNTIL done ;Loop until empty buffer seen
+
+GOTO 100 ;Exit
+90 TYPE "SERIAL LINE I/O ERROR: ", $ERROR(IOSTAT(line))
+
+PAUSE
+100 DETACH (line)
+
+RETURN
+.END
+"""
+
+
+def test_display_example_types_etx_records_until_an_empty_one():
+    """[000] L8146-8190: records end with ETX (not shown); the program sleeps in
+    WAIT.EVENT until bytes arrive (arriving bytes set the task's event flag),
+    types each record, and stops after the empty one, detaching the line."""
+    system, task = run_vplus(DISPLAY, max_cycles=20)
+    line = system.devices.serial(1)
+    assert not task.finished and system.console.output == ""  # waiting for data
+    scheduler = Scheduler()
+    scheduler.add(task)
+    for chunk in (b"AB", b"C\x03DE", b"F\x03", b"\x03"):
+        line.feed(chunk)
+        for _ in range(3):
+            scheduler.run_cycle()
+    assert task.finished and task.error is None
+    assert system.console.output == "ABC\nDEF\n\n" and line.owner is None

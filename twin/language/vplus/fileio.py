@@ -24,6 +24,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Callable
 
 from . import messages as msg
 
@@ -55,9 +56,14 @@ class SerialLine:
     received: bytearray = field(default_factory=bytearray)
     sent: bytearray = field(default_factory=bytearray)
     owner: int | None = None  # task that has it attached
+    # Called when bytes arrive: sets the attached task's event flag, so a
+    # program in WAIT.EVENT wakes up ([000] "display()" serial example).
+    listener: Callable[[], None] | None = None
 
     def feed(self, data: bytes | str) -> None:
         self.received += data.encode("latin-1") if isinstance(data, str) else data
+        if self.listener is not None:
+            self.listener()
 
 
 @dataclass
@@ -153,6 +159,7 @@ class Devices:
             raise IoError(msg.NOT_ATTACHED)
         if unit.serial is not None:
             unit.serial.owner = None
+            unit.serial.listener = None
 
     def release_task(self, task: int) -> None:
         """A program that ends normally has its units detached and files closed."""

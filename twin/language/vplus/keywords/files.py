@@ -33,7 +33,8 @@ def _attach(rt, unit: tuple, items: tuple):
     device = _str(items[0]).strip().upper() if items else None
     lun = unit[0] if unit else None
     if lun is None and not mode & RETURN_LUN or lun is not None and to_int(lun) == ROBOT_LUN:
-        return None  # ATTACH () / (0): the robot; task 0 holds it from the start here
+        rt.attach_robot()  # ATTACH () / (0): the robot (tasking.py)
+        return None
     devices = _devices(rt)
     if device is None:
         device = "TERMINAL" if to_int(lun) == TERMINAL_LUN else "PENDANT"
@@ -45,13 +46,18 @@ def _attach(rt, unit: tuple, items: tuple):
     else:
         number = to_int(lun)
     devices.run(rt.number, number, devices.attach, device)
+    unit = devices.units.get((rt.number, number))
+    if unit is not None and unit.serial is not None:
+        unit.serial.listener = rt.set_event  # arriving bytes wake WAIT.EVENT
     return float(number) if mode & RETURN_LUN else None
 
 
 @instruction("DETACH")
 def _detach(rt, unit: tuple, items: tuple):
     lun = _arg(unit, 0)
-    if lun != ROBOT_LUN:
+    if lun == ROBOT_LUN:
+        rt.detach_robot()  # DETACH () / (0): the robot is free for another task or the pendant
+    else:
         _devices(rt).run(rt.number, lun, _devices(rt).detach)
 
 
