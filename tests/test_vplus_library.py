@@ -79,7 +79,7 @@ def test_pack_and_unpack_span_128_character_elements():
 
 def test_binary_conversions_round_trip_big_endian():
     out = output_of(program(
-        'TYPE INTB($INTB(-2)), " ", LNGB($LNGB(123456789)), " ", FLTB($FLTB(1.5)), " ", DBLB($DBLB(0.1))\n'
+        'TYPE INTB($INTB(-2)), " ", LNGB($LNGB(^D123456789)), " ", FLTB($FLTB(1.5)), " ", DBLB($DBLB(0.1))\n'
         'TYPE ASC($INTB(258), 1), " ", ASC($INTB(258), 2), " ", LEN($DBLB(1)), " ", INTB("xx"+$INTB(7), 3)\n'
         'SET loc = TRANS(10, 20, 30, 0, 180, 45)\n'
         'TYPE LEN($TRANSB(loc)), " ", IDENTICAL(TRANSB($TRANSB(loc)), loc)'))
@@ -383,3 +383,10 @@ def test_attach_and_detach_of_unit_0_take_and_free_the_robot():
         scheduler.run_cycle()
         holders.append(system.robot_holder)
     assert holders == [task, None, task]
+
+
+def test_error_and_error_text_inside_a_reacte_handler():
+    # [000] L4562-4572: the REACTE routine reads ERROR() and $ERROR(), then RETURNE.
+    text = (program("REACTE trap\nx = undefined.thing\nTYPE \"after\"", name="main")
+            + program('TYPE ERROR(-1), " ", $ERROR(ERROR(-1))\nRETURNE', name="trap"))
+    assert output_of(text) == f"{msg.UNDEFINED_VALUE} *Undefined value*\nafter\n"
