@@ -16,6 +16,7 @@ from typing import Union
 @dataclass
 class Num:
     value: float
+    double: bool = False  # a ^D constant keeps double precision; others are single
 
 
 @dataclass

@@ -40,6 +40,7 @@ from . import ast
 from . import messages as msg
 from .compile_library import LIBRARY_CALLS, LibraryStatements
 from .keywords import FUNCTIONS, INSTRUCTIONS, STRING_FUNCTIONS
+from .values import single
 from .parser import normalize_name
 
 # A time slice: loops hand the CPU back to the scheduler every this many
@@ -225,6 +226,8 @@ class ProgramCompiler(LibraryStatements):
                         self.scope.auto.add(key)
                     elif statement.scope == "LOCAL":
                         self.scope.local.add(key)
+                    if statement.double:
+                        self.scope.doubles.add(key)
 
     def emit_return(self, depth: int) -> None:
         if not self.program.params:
@@ -282,7 +285,8 @@ class ProgramCompiler(LibraryStatements):
     # ----------------------------------------------------------- expressions
     def expr(self, e: ast.Expr) -> str:
         if isinstance(e, ast.Num):
-            return repr(float(e.value))
+            # A constant is a single-precision real unless written ^D ([000] L3895-3910).
+            return repr(float(e.value) if e.double else single(e.value))
         if isinstance(e, ast.Str):
             return repr(e.value)
         if isinstance(e, ast.Var):
@@ -403,9 +407,17 @@ class ProgramCompiler(LibraryStatements):
         value = self.expr(s.value)
         if s.target.name.startswith("$"):
             value = f"_str({value})"
-        elif not isinstance(s.value, ast.Num):
-            value = f"_real({value})"
+        elif isinstance(s.value, ast.Num) and (not s.value.double or self.key(s.target) in self.scope.doubles):
+            pass  # a constant is stored as it was compiled
+        else:
+            value = self.real(s.target, value)
         self.assign(s.target, value, depth)
+
+    def real(self, target: ast.Var, value: str) -> str:
+        """The Python expression that stores `value` into a real variable:
+        DOUBLE variables keep 64 bits, the others are single precision."""
+        key = self.key(target)
+        return f"_real({value})" if key in self.scope.doubles else f"_single({value})"
 
     def s_SetLocation(self, s: ast.SetLocation, depth: int) -> None:
         self.assign(s.target, f"_location({self.expr(s.value)})", depth)
@@ -446,7 +458,7 @@ class ProgramCompiler(LibraryStatements):
         self.emit(depth, f"{stop} = _real({self.expr(s.stop)})")
         self.emit(depth, f"{step} = {self.expr(s.step_by) if s.step_by else '1.0'}")
         self.emit(depth, f"if {step} == 0: rt.zero_step()")
-        self.assign(s.target, f"_real({self.expr(s.start)})", depth)
+        self.assign(s.target, self.real(s.target, self.expr(s.start)), depth)
 
     def for_test(self, s: ast.For, stop: str, step: str) -> str:
         current = self.read(s.target)
@@ -466,7 +478,7 @@ class ProgramCompiler(LibraryStatements):
 
         def tail(d: int) -> None:
             self.current = s
-            self.assign(s.target, f"{self.read(s.target)} + {step}", d)
+            self.assign(s.target, self.real(s.target, f"{self.read(s.target)} + {step}"), d)
             self.slice_check(d)
 
         self.loop_body(s.body, tail, depth + 1)
@@ -609,7 +621,8 @@ class ProgramCompiler(LibraryStatements):
         ops.append(_Op("mark", s, target=top))
         ops.append(_Op("branch", s, target=end, condition=f"not {self.for_test(s, stop, step)}"))
         self.lower_loop(s, ops, next_, end)
-        ops.append(_Op("code", s, emit=lambda depth: self.assign(s.target, f"{self.read(s.target)} + {step}", depth)))
+        ops.append(_Op("code", s, emit=lambda depth: self.assign(
+            s.target, self.real(s.target, f"{self.read(s.target)} + {step}"), depth)))
         ops.append(_Op("jump", s, target=top))
         ops.append(_Op("mark", s, target=end))
 
@@ -718,7 +731,7 @@ class ProgramCompiler(LibraryStatements):
         if s.target.name.startswith("$"):
             self.assign(s.target, text, depth)
         else:
-            self.assign(s.target, f"rt.prompt_number({text})", depth)
+            self.assign(s.target, self.real(s.target, f"rt.prompt_number({text})"), depth)
 
     def s_Parameter(self, s: ast.Parameter, depth: int) -> None:
         index = self.expr(s.index) if s.index is not None else "None"

@@ -34,6 +34,7 @@ LOCATION_OUT_OF_RANGE = -610  # (LRG)
 ROBOT_NOT_ATTACHED = -601  # (LRG)
 ROBOT_ATTACHED = -602  # twin-chosen: ATTACH of a robot another task holds
 TASK_RUNNING = -420  # twin-chosen: EXECUTE or KILL of a task that is executing
+OVERFLOW = -416  # twin-chosen: a value beyond the range of a single-precision real
 COLLISION = -1020  # twin-defined: the real controller does not see the cell
 JOINT_LIMIT = -1021  # twin-defined code; text as the controller prints it, "*Joint N limit stop*"
 STRAIGHT_LINE_CONFIG = -1022  # twin-defined code for the controller's configuration-change refusal
@@ -83,6 +84,7 @@ MESSAGES: dict[int, str] = {
     ROBOT_NOT_ATTACHED: "*Robot not attached to this program*",
     ROBOT_ATTACHED: "*Robot already attached to a program*",
     TASK_RUNNING: "*Program already executing*",
+    OVERFLOW: "*Arithmetic overflow*",
     COLLISION: "*Collision detected*",
     JOINT_LIMIT: "*Joint limit stop*",
     STRAIGHT_LINE_CONFIG: "*Straight-line motion can't alter configuration*",

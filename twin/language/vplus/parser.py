@@ -57,7 +57,8 @@ class _ToAst(Transformer):
 
     # ---- expressions
     def number(self, meta, children):
-        return ast.Num(parse_number(str(children[0])))
+        text = str(children[0])
+        return ast.Num(parse_number(text), double=text[:2].upper() == "^D")
 
     def string(self, meta, children):
         return ast.Str(str(children[0])[1:-1])
@@ -98,7 +99,7 @@ class _ToAst(Transformer):
     def neg(self, meta, children):
         operand = children[0]
         if isinstance(operand, ast.Num):
-            return ast.Num(-operand.value)
+            return ast.Num(-operand.value, operand.double)
         return ast.Unary("-", operand)
 
     def not_(self, meta, children):

@@ -8,6 +8,7 @@ Reals are Python floats, strings are `str`, transformations are
 from __future__ import annotations
 
 import math
+import struct
 
 from ...controller.location import Location
 from ...errors import ProgramError
@@ -16,6 +17,7 @@ from . import messages as msg
 TRUE = -1.0
 FALSE = 0.0
 MAX_STRING = 128  # V+ guide v17, "String Data Type": 0..128 characters
+_SINGLE = struct.Struct("<f")
 
 
 class VArray(dict):
@@ -90,6 +92,22 @@ def _real(value) -> float:
     if isinstance(value, (str, Location)) or value is None:
         raise fail(msg.WRONG_TYPE, "real value expected")
     return float(value)
+
+
+def single(value: float) -> float:
+    """A real as a (32-bit IEEE) single-precision V+ real holds it: reals are
+    single precision unless declared DOUBLE (V+ guide v17 L3868-3895)."""
+    return _SINGLE.unpack(_SINGLE.pack(value))[0]
+
+
+def _single(value) -> float:
+    """Store into a real variable: a real, rounded to single precision."""
+    try:
+        return _SINGLE.unpack(_SINGLE.pack(value))[0]
+    except OverflowError:
+        raise fail(msg.OVERFLOW, f"{value:g} is beyond single precision") from None
+    except struct.error:
+        raise fail(msg.WRONG_TYPE, "real value expected") from None
 
 
 def _location(value) -> Location:
