@@ -29,7 +29,6 @@ from typing import Callable
 from . import messages as msg
 
 TERMINAL_LUN = 4
-PENDANT_LUN = 1
 DISK_LUNS = range(5, 15)  # handed out by ATTACH (lun, 4) "DISK"
 SERIAL_LUNS = range(15, 20)
 GRAPHICS_LUNS = range(20, 24)  # V+ guide v17, "Graphics Programming"

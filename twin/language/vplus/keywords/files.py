@@ -113,10 +113,9 @@ def _fset(rt, unit: tuple, items: tuple):
     devices.run(rt.number, _arg(unit, 0), check)
 
 
-@instruction("FCMND")
-def _fcmnd(rt, unit: tuple, items: tuple):
-    # Rename, format, mkdir, rmdir and DDCMP settings: their command numbers
-    # are in the Language Reference Guide, which we do not have.
+def _refuse(rt, unit: tuple, items: tuple):
+    """An operation the unit's device cannot do: *Not attached to logical unit*
+    when nothing is attached, else *Illegal I/O device command* (IOSTAT)."""
     devices = _devices(rt)
 
     def refuse(task, lun):
@@ -124,6 +123,11 @@ def _fcmnd(rt, unit: tuple, items: tuple):
         raise IoError(msg.ILLEGAL_IO_COMMAND)
 
     devices.run(rt.number, _arg(unit, 0), refuse)
+
+
+# FCMND: rename, format, mkdir, rmdir and DDCMP settings; their command numbers
+# are in the Language Reference Guide, which we do not have.
+instruction("FCMND")(_refuse)
 
 
 @instruction("WRITE")
@@ -181,25 +185,15 @@ def _pendant(rt, select):
 # GETEVENT) act on units ATTACH could never open, so they report
 # *Not attached to logical unit* through IOSTAT; external encoders (SETDEVICE)
 # are absent.
-def _absent_window(rt, unit: tuple, items: tuple):
-    devices = _devices(rt)
-
-    def refuse(task, lun):
-        devices.unit(task, lun)
-        raise IoError(msg.ILLEGAL_IO_COMMAND)
-
-    devices.run(rt.number, _arg(unit, 0), refuse)
-
-
 for _name in ("FOPEN", "GARC", "GCHAIN", "GCLEAR", "GCLIP", "GCOLOR", "GCOPY", "GFLOOD", "GICON", "GLINE",
               "GLINES", "GLOGICAL", "GPANEL", "GPOINT", "GRECTANGLE", "GSCAN", "GSLIDE", "GTEXTURE", "GTRANS",
               "GTYPE"):
-    instruction(_name)(_absent_window)
+    instruction(_name)(_refuse)
 
 
 @instruction("GETEVENT", targets=True)
 def _getevent(rt, unit: tuple, kinds: tuple):
-    _absent_window(rt, unit, ())
+    _refuse(rt, unit, ())
     return [None] * len(kinds)
 
 
