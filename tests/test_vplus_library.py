@@ -390,3 +390,9 @@ def test_error_and_error_text_inside_a_reacte_handler():
     text = (program("REACTE trap\nx = undefined.thing\nTYPE \"after\"", name="main")
             + program('TYPE ERROR(-1), " ", $ERROR(ERROR(-1))\nRETURNE', name="trap"))
     assert output_of(text) == f"{msg.UNDEFINED_VALUE} *Undefined value*\nafter\n"
+
+
+def test_a_wrong_argument_to_an_io_statement_stops_at_its_step(tmp_path):
+    # A type error is not an I/O error: it stops the program and names the step.
+    err = error_of('ATTACH (d, 4) "DISK"\nFOPENR (d) 5', sandbox=tmp_path)
+    assert err.code == msg.WRONG_TYPE and err.step == 3 and err.line == 3
