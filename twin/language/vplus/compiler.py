@@ -46,6 +46,7 @@ from .parser import normalize_name
 # A time slice: loops hand the CPU back to the scheduler every this many
 # iterations, as the V+ scheduler preempts a task at the end of its slice.
 SLICE_ITERATIONS = 1024
+MAX_DIMENSIONS = 3  # arrays have one to three dimensions ([000] L3987-4045)
 
 # Program-interrupt and task instructions, carried out by the task itself
 # (tasking.TaskControl): keyword -> (method of rt, whether it may wait).
@@ -53,7 +54,7 @@ _TASK_INSTRUCTIONS = {
     "LOCK": ("lock", True), "IGNORE": ("ignore", False), "ABORT": ("abort", False),
     "KILL": ("kill", False), "CYCLE.END": ("cycle_end", False), "PAUSE": ("pause", True),
     "SET.EVENT": ("set_event", False), "CLEAR.EVENT": ("clear_event", False),
-    "WAIT.EVENT": ("wait_event", True), "RELEASE": ("release", True),
+    "WAIT.EVENT": ("wait_event", True), "RELEASE": ("release", True), "RUNSIG": ("runsig", False),
 }
 _TASK_FUNCTIONS = {"PRIORITY": "priority", "TASK": "task_info", "GET.EVENT": "get_event"}
 # Block statements and steps that only steer the flow are not wrapped for the
@@ -61,6 +62,8 @@ _TASK_FUNCTIONS = {"PRIORITY": "priority", "TASK": "task_info", "GET.EVENT": "ge
 _UNTRAPPED = (ast.If, ast.For, ast.While, ast.DoUntil, ast.Case, ast.Declare, ast.LabelOnly)
 
 _FLOW = {"RETURN", "RETURNE", "EXIT", "NEXT", "STOP", "HALT"}
+# Instructions the compiler carries out itself (besides the keyword table).
+_INSTRUCTION_NAMES = {*_FLOW, *_TASK_INSTRUCTIONS, "WAIT", "REACT", "REACTI", "REACTE"}
 
 _RELATIONAL = {"==": "==", "<>": "!=", "<": "<", "<=": "<=", ">": ">", ">=": ">="}
 _ARITH = {"+": "+", "-": "-", "*": "*", "/": "/"}
@@ -254,6 +257,8 @@ class ProgramCompiler(LibraryStatements):
         return f"G[{key!r}]"
 
     def index(self, indices: list[ast.Expr]) -> str:
+        if len(indices) > MAX_DIMENSIONS:
+            raise self.error(self.current, msg.ILLEGAL_ARRAY_INDEX, f"{len(indices)} dimensions (at most 3)")
         parts = []
         for e in indices:
             if isinstance(e, ast.Num) and float(e.value).is_integer():
@@ -745,7 +750,7 @@ class ProgramCompiler(LibraryStatements):
         return ", ".join("None" if a is None else self.expr(a) for a in args)
 
     def s_Instruction(self, s: ast.Instruction, depth: int) -> None:
-        name = s.name
+        name = s.name = self.keyword(s)
         if name in ("RETURN", "RETURNE"):  # RETURNE: an error trap goes on after the failed step
             self.emit_return(depth)
             return
@@ -778,6 +783,19 @@ class ProgramCompiler(LibraryStatements):
         call = f"I[{name!r}](rt{', ' if args else ''}{args})"
         self.emit(depth, f"yield from {call}" if spec.waits else call)
 
+
+    def keyword(self, s: ast.Instruction) -> str:
+        """An instruction's full name.  Like the V+ editor, which expands
+        abbreviations when it closes a line ([000] L2583, L2593), a unique
+        beginning of an instruction keyword (at least two letters) stands
+        for it: SIGN 1 is SIGNAL 1."""
+        if s.name in _INSTRUCTION_NAMES or s.name in INSTRUCTIONS or len(s.name) < 2:
+            return s.name
+        matches = sorted({n for n in [*_INSTRUCTION_NAMES, *INSTRUCTIONS] if n.startswith(s.name)})
+        if len(matches) == 1:
+            return matches[0]
+        detail = f"{s.name} (could be {', '.join(matches)})" if matches else s.name
+        raise self.error(s, msg.UNKNOWN_KEYWORD, detail)
 
     def reaction(self, s: ast.Instruction, depth: int) -> None:
         """REACT[I] signal, program(args)[, priority] and REACTE program: the

@@ -80,7 +80,10 @@ class _ToAst(Transformer):
         return inner
 
     def variable_ref(self, meta, children):
-        return ast.Var(normalize_name(str(children[0])), [] if len(children) > 1 else None)
+        return ast.Var(normalize_name(str(children[0])))
+
+    def array_ref(self, meta, children):
+        return ast.Var(normalize_name(str(children[0])), [])
 
     def call(self, meta, children):
         return ast.Call(str(children[0]).upper(), children[1])
@@ -133,7 +136,7 @@ class _ToAst(Transformer):
         double = False
         items = []
         for child in children[1:]:
-            if isinstance(child, Token):  # DOUBLE is anonymous; kept for clarity
+            if isinstance(child, Token):  # the DOUBLE keyword
                 double = True
             elif child is not None:
                 items.append(child)

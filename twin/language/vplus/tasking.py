@@ -90,6 +90,7 @@ class TaskControl:
         self.abort_requested = False
         self.event = False
         self.scheduler = None  # set by Scheduler.add
+        self.run_signal: int | None = None  # RUNSIG
         self.state = "running"
 
     def _drive(self, args: list) -> Iterator:
@@ -116,6 +117,8 @@ class TaskControl:
             self.finished = True
             self.state = "error" if self.error is not None else "idle"
             self.detach_robot()
+            if self.run_signal is not None:
+                self.io.signal(-self.run_signal)
 
     def _interruptible(self, main: Iterator) -> Iterator:
         """Run `main`, calling reactions between its steps."""
@@ -276,6 +279,13 @@ class TaskControl:
         self.state = "paused"
         yield lambda: not self.paused
         self.state = "running"
+
+    def runsig(self, signal) -> None:
+        """RUNSIG signal: the signal is on while this task runs and goes off
+        when the task ends, normally or by an error (negative: the reverse)."""
+        number = values.to_int(signal)
+        self.io.signal(number)
+        self.run_signal = number
 
     # ------------------------------------------------------------ events
     def set_event(self, number=None) -> None:
