@@ -396,3 +396,11 @@ def test_a_wrong_argument_to_an_io_statement_stops_at_its_step(tmp_path):
     # A type error is not an I/O error: it stops the program and names the step.
     err = error_of('ATTACH (d, 4) "DISK"\nFOPENR (d) 5', sandbox=tmp_path)
     assert err.code == msg.WRONG_TYPE and err.step == 3 and err.line == 3
+
+
+def test_a_file_open_for_write_can_be_read_back(tmp_path):
+    # [000] "Disk I/O": FOPENW allows both read and write operations.
+    system = run_ok('ATTACH (d, 4) "DISK"\nFOPENW (d) "rw.txt"\nWRITE (d) /X200, "tail"\nREAD (d) $back\n'
+                    'n = IOSTAT(d, 2)\nREAD (d) $more\ns = IOSTAT(d)', sandbox=tmp_path)
+    g = system.globals
+    assert g["$back"] == " " * 128 and g["n"] == 204 and g["s"] == msg.UNEXPECTED_EOF

@@ -74,6 +74,11 @@ class OpenFile:
     data: bytes = b""  # what reads see (R and D)
     position: int = 0
 
+    def content(self) -> bytes:
+        """What a READ sees: the file as opened, or as written so far (W and A:
+        a file open for writing may be read too, [000] "Disk I/O")."""
+        return self.data if self.mode in ("R", "D") else self.path.read_bytes()
+
 
 @dataclass
 class Unit:
@@ -299,18 +304,17 @@ class Devices:
             self.last_length[(task, lun)] = len(text)
             return text
         handle = self._file(task, lun)
-        if handle.mode == "W":
-            raise IoError(msg.ILLEGAL_IO_COMMAND)
+        data = handle.content()
         if handle.record_length > 0:
             if handle.random and record > 0:
                 handle.position = (record - 1) * handle.record_length
-            if handle.position >= len(handle.data):
+            if handle.position >= len(data):
                 raise IoError(msg.UNEXPECTED_EOF)
-            chunk = handle.data[handle.position : handle.position + handle.record_length]
+            chunk = data[handle.position : handle.position + handle.record_length]
             handle.position += handle.record_length
             text = chunk.ljust(handle.record_length, b"\0").decode("latin-1")
         else:
-            rest = handle.data[handle.position :]
+            rest = data[handle.position :]
             if not rest or rest[0] == CTRL_Z:
                 raise IoError(msg.UNEXPECTED_EOF)
             end = rest.find(b"\n")
@@ -335,9 +339,10 @@ class Devices:
                 raise IoError(msg.NO_DATA)
             else:
                 handle = self._file(task, lun)
-                if handle.position >= len(handle.data):
+                data = handle.content()
+                if handle.position >= len(data):
                     raise IoError(msg.UNEXPECTED_EOF)
-                byte = handle.data[handle.position]
+                byte = data[handle.position]
                 handle.position += 1
         except IoError as err:
             self.status[(task, lun)] = err.code

@@ -12,7 +12,7 @@ from .. import messages as msg
 from ..fileio import RETURN_LUN, TERMINAL_LUN, IoError
 from ..formats import render
 from .strings import leading_number
-from ..values import _str, fail, to_int
+from ..values import MAX_STRING, _str, fail, to_int
 from . import function, instruction
 
 ROBOT_LUN = 0
@@ -141,8 +141,8 @@ def _write(rt, unit: tuple, items: tuple):
 @instruction("READ", waits=True, targets=True)
 def _read(rt, unit: tuple, kinds: tuple):
     """READ (lun, record) var, ...: one record.  A single variable takes the
-    whole record (a real takes its leading number, as VAL does); several take
-    its comma- or space-separated fields in order.  A serial READ waits for a
+    whole record (a real takes its leading number, as VAL does; a string its
+    first 128 characters); several take its comma- or space-separated fields in order.  A serial READ waits for a
     whole line; after an error the variables keep their values."""
     devices = _devices(rt)
     lun, record = _arg(unit, 0), _arg(unit, 1)
@@ -154,7 +154,8 @@ def _read(rt, unit: tuple, kinds: tuple):
     if text is None:
         return [None] * len(kinds)
     fields = [text] if len(kinds) == 1 else _fields(text, len(kinds))
-    return [f if kind == "s" else leading_number(f) for kind, f in zip(kinds, fields)]
+    # A record may hold up to 512 bytes, a string 128: the rest is not kept.
+    return [f[:MAX_STRING] if kind == "s" else leading_number(f) for kind, f in zip(kinds, fields)]
 
 
 def _fields(text: str, count: int) -> list[str]:
