@@ -261,15 +261,16 @@ REACT -1001, alarm, 10 ;the reaction re-enables itself ([000] L4640)
 """, name="alarm")
 
 
-def drive_1001(edges: list[tuple[float, bool]]):
-    """Input 1001 follows `edges` (time, level) on simulated time."""
+def drive_inputs(edges: dict[int, list[tuple[float, bool]]], initial: bool = False):
+    """Each input follows its (time, level) changes on simulated time."""
 
     def each_cycle(system):
-        level = True
-        for time, value in edges:
-            if system.clock() >= time:
-                level = value
-        system.io.set(1001, level)
+        for signal, changes in edges.items():
+            level = initial
+            for time, value in changes:
+                if system.clock() >= time:
+                    level = value
+            system.io.set(signal, level)
 
     return each_cycle
 
@@ -280,7 +281,7 @@ def test_react_example_of_the_manual_with_lock():
     is deferred until LOCK 0, before step e.  (Each MOVE of the manual is a
     0.1 s step here.)"""
     system, task = run_vplus(REACT_EXAMPLE, setup=lambda s: s.io.set(1001, True),
-                             each_cycle=drive_1001([(0.05, False), (0.15, True), (0.25, False)]))
+                             each_cycle=drive_inputs({1001: [(0.05, False), (0.15, True), (0.25, False)]}, initial=True))
     assert task.error is None
     assert system.console.output == "a!10bcd!10e\n"
     assert task.program_priority == 0
@@ -368,3 +369,61 @@ TYPE "task 1 stopped: ", $ERROR(ERROR(1))
     assert system.console.output == "task 1 stopped: *Robot not attached to this program*\n"
     assert system.task(1).error.code == msg.ROBOT_NOT_ATTACHED
     assert system.robot_holder is None  # the ended task 0 let the robot go
+
+
+def test_program_interrupt_example_of_the_manual():
+    """[000] L4609-4690 "Program Interrupt Example": task 1 runs at priority
+    30 and task 2 at 20 in all slices, each with a reaction at program
+    priority 5.  The numbers in the log are the manual's event numbers:
+    (3) task 1's reaction interrupts prog_a; (5) prog_a waits for its event
+    flag and task 2 runs prog_b; (8) task 2's reaction is deferred by LOCK 10
+    and (9) runs at LOCK 0; (11) signal 1003 triggers task 1's reaction and
+    sets its event flag, and task 1 interrupts task 2's reaction; (13)
+    prog_a waits again and task 2's reaction goes on; (14) SET.EVENT 1 and
+    RELEASE; (15) task 1 resumes."""
+    text = program("""
+EXECUTE 1 prog_a(), , , 30
+EXECUTE 2 prog_b(), , , 20
+""", name="main") + program("""
+a.done = FALSE
+REACT 1003, react_a, 5
+TYPE "1 prog_a at ", PRIORITY
+WHILE NOT a.done DO
+END
+TYPE "4 prog_a resumes"
+CLEAR.EVENT
+WAIT.EVENT 1
+TYPE "12 prog_a resumes"
+CLEAR.EVENT
+WAIT.EVENT 1
+TYPE "15 prog_a resumes"
+""", name="prog_a") + program("""
+TYPE "3 react_a at ", PRIORITY
+REACT 1003, react_a, 5
+a.done = TRUE
+""", name="react_a") + program("""
+REACT 1010, react_b, 5
+TYPE "5 prog_b"
+LOCK 10
+WHILE NOT SIG(1011) DO
+END
+TYPE "9 prog_b LOCK 0"
+LOCK 0
+TYPE "14 prog_b SET.EVENT 1"
+SET.EVENT 1
+RELEASE
+TYPE "prog_b ends at ", PRIORITY
+""", name="prog_b") + program("""
+TYPE "9 react_b at ", PRIORITY
+WHILE NOT SIG(1012) DO
+END
+TYPE "13 react_b returns"
+""", name="react_b")
+    inputs = drive_inputs({1003: [(0.05, True), (0.15, False), (0.2, True)], 1010: [(0.1, True)],
+                           1011: [(0.15, True)], 1012: [(0.3, True)]})
+    system, task = run_vplus(text, each_cycle=inputs)
+    assert [t.error for t in system.tasks] == [None, None, None]
+    assert system.console.output.splitlines() == [
+        "1 prog_a at 0", "3 react_a at 5", "4 prog_a resumes", "5 prog_b", "9 prog_b LOCK 0",
+        "9 react_b at 5", "3 react_a at 5", "12 prog_a resumes", "13 react_b returns",
+        "14 prog_b SET.EVENT 1", "15 prog_a resumes", "prog_b ends at 0"]

@@ -18,7 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Iterator
 
-from ...controller.scheduler import RELEASE
+from ...controller.scheduler import RELEASE, SLICES
 from ...errors import ProgramError
 from . import messages as msg
 from . import values
@@ -26,6 +26,7 @@ from . import values
 TASKS = 28  # tasks 0..27 (0..6 without the V+ Extensions), [000] L1364
 ERROR_TRAP_PRIORITY = 254  # program priority inside a REACTE routine, [000] L1340
 MAX_PROGRAM_PRIORITY = 127  # LOCK and reaction priorities 0..127, [000] L1284
+MAX_TASK_PRIORITY = 64  # task priorities in a slice: 1-31 user, up to 64 the servo ([000] L1376-1392)
 REACT_SIGNALS = (range(1001, 1013), range(2001, 2009))  # inputs and soft signals, [000] L4507
 
 # Default task priority in each of the 16 time slices ([000] L1960-2075, the
@@ -232,7 +233,9 @@ class TaskControl:
 
     # ------------------------------------------------------------ other tasks
     def execute(self, number, program: str, args: list, cycles=None, step=None, priority=None) -> None:
-        """EXECUTE task program(args), cycles: start a program in another task."""
+        """EXECUTE task program(args), cycles, step, priority: start a program
+        in another task ([000] L1366-1374: EXECUTE may override the task's
+        priorities; here one priority for all 16 slices)."""
         task_number = 0 if number is None else values.to_int(number)
         if not 0 <= task_number < TASKS:
             raise values.fail(msg.ILLEGAL_VALUE, f"task {task_number}")
@@ -240,6 +243,11 @@ class TaskControl:
             raise values.fail(msg.ILLEGAL_VALUE, "EXECUTE from a step other than the first")
         count = 1 if cycles is None else values.to_int(cycles)
         task = self.system.start(program, task_number, args, cycles=-1 if count < 0 else max(count, 1))
+        if priority is not None:  # a task priority for every slice, in place of the defaults
+            level = values.to_int(priority)
+            if not 1 <= level <= MAX_TASK_PRIORITY:
+                raise values.fail(msg.ILLEGAL_VALUE, f"task priority {level}")
+            task.priorities = (level,) * SLICES
         if self.scheduler is not None:
             self.scheduler.add(task)
 
