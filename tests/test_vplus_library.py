@@ -404,3 +404,10 @@ def test_a_file_open_for_write_can_be_read_back(tmp_path):
                     'n = IOSTAT(d, 2)\nREAD (d) $more\ns = IOSTAT(d)', sandbox=tmp_path)
     g = system.globals
     assert g["$back"] == " " * 128 and g["n"] == 204 and g["s"] == msg.UNEXPECTED_EOF
+
+
+def test_graphics_statements_of_the_manual_parse_and_report_the_absent_window():
+    # [000] L9262-9302 slide bar: GSLIDE (glun, 0) 1 = x, y, length, max_pos, arrow_inc, handle_pos.
+    out = output_of(program('GSLIDE (20, 0) 1 = 10, 20, 100, 50, 1, 0\nTYPE IOSTAT(20)\n'
+                            'GPANEL (20, 0) 100, 100, 45, 45\nGETEVENT (20) event[]\nTYPE IOSTAT(20)'))
+    assert out == f"{msg.NOT_ATTACHED}\n{msg.NOT_ATTACHED}\n"
