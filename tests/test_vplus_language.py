@@ -341,3 +341,15 @@ def test_run_time_errors_name_file_line_column_and_source_text():
     err = task.error
     assert (err.file, err.line, err.column, err.step, err.program) == ("test.pg", 3, 4, 3, "t")
     assert err.code == msg.UNDEFINED_VALUE and "undefined.z" in err.message
+
+
+def test_declarations_must_come_before_the_first_executable_step():
+    """[000] L859-864: only comments, blank lines and other declarations may
+    come between .PROGRAM and AUTO, LOCAL or GLOBAL."""
+    system, task = run_vplus(program("; comment\nAUTO a\nLOCAL b\nGLOBAL DOUBLE c\na = 1\nTYPE a"))
+    assert task.error is None and system.console.output == "1\n"
+    with pytest.raises(ProgramError) as info:
+        run_vplus(program("a = 1\nAUTO b"))
+    assert info.value.code == msg.SYNTAX_ERROR and info.value.line == 3
+    with pytest.raises(ProgramError):
+        run_vplus(program("IF TRUE THEN\n  LOCAL c\nEND"))

@@ -221,6 +221,13 @@ class ProgramCompiler(LibraryStatements):
                                statement_count=self.count)
 
     def collect_declarations(self, body: list[ast.Statement]) -> None:
+        # Declarations come before any executable step: only comments, blank
+        # lines and other declarations may precede them ([000] L859-864).
+        executable = next((s for s in body if not isinstance(s, (ast.Declare, ast.LabelOnly))), None)
+        for statement in _walk(body):
+            if isinstance(statement, ast.Declare) and executable is not None and statement.line > executable.line:
+                raise self.error(statement, msg.SYNTAX_ERROR,
+                                 f"{statement.scope} after the first executable step (line {executable.line})")
         for statement in body:
             if isinstance(statement, ast.Declare):
                 for var, _dims in statement.names:
