@@ -427,3 +427,50 @@ TYPE "13 react_b returns"
         "1 prog_a at 0", "3 react_a at 5", "4 prog_a resumes", "5 prog_b", "9 prog_b LOCK 0",
         "9 react_b at 5", "3 react_a at 5", "12 prog_a resumes", "13 react_b returns",
         "14 prog_b SET.EVENT 1", "15 prog_a resumes", "prog_b ends at 0"]
+
+
+def test_execution_priority_example_of_the_manual():
+    """[000] L1474-1530 "Execution Priority Example": tasks 0 and 2 run at
+    priority 20, task 1 at 10.  (1) prog_a waits for its event: task 2 runs
+    prog_c; (2) prog_c RELEASEs: task 1 runs; (3) prog_c sets task 0's event
+    and runs to the end of its slice, then tasks 0 and 2 swap slice by slice;
+    (5) prog_a completes: task 2 goes on; (6) prog_c completes: task 1 runs.
+    The log gets a letter each time another task takes over (a loop pass is
+    a CALL; 1024 passes use up a 1 ms slice)."""
+    text = program("""
+AUTO i
+$log = ""
+$last = ""
+c.done = FALSE
+CALL mark("a")
+EXECUTE 1 prog_b(), , , 10
+EXECUTE 2 prog_c(), , , 20
+CLEAR.EVENT
+WAIT.EVENT 1
+FOR i = 1 TO 3000
+  CALL mark("a")
+END
+""", name="prog_a") + program("""
+DO
+  CALL mark("b")
+UNTIL c.done
+""", name="prog_b") + program("""
+AUTO i
+FOR i = 1 TO 100
+  CALL mark("c")
+END
+RELEASE
+SET.EVENT 0
+FOR i = 1 TO 5000
+  CALL mark("c")
+END
+c.done = TRUE
+""", name="prog_c") + program("""
+IF $c <> $last THEN
+  $log = $log + $c
+  $last = $c
+END
+""", name="mark", params="$c")
+    system, task = run_vplus(text)
+    assert [t.error for t in system.tasks] == [None, None, None]
+    assert system.globals["$log"] == "acbc" + "ac" * 3 + "b"
