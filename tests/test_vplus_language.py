@@ -353,3 +353,15 @@ def test_declarations_must_come_before_the_first_executable_step():
     assert info.value.code == msg.SYNTAX_ERROR and info.value.line == 3
     with pytest.raises(ProgramError):
         run_vplus(program("IF TRUE THEN\n  LOCAL c\nEND"))
+
+
+def test_an_argument_of_the_wrong_data_type_is_an_error():
+    """[001] L510: the argument list must match in number and data type."""
+    text = program('CALL sub("text")', name="main") + program("TYPE x", name="sub", params="x")
+    system, task = run_vplus(text)
+    # The CALL step fails: the arguments it passes do not fit.
+    assert task.error.code == msg.WRONG_TYPE and (task.error.program, task.error.line) == ("main", 2)
+    text = program("CALL sub(5)", name="main") + program("TYPE $s", name="sub", params="$s")
+    assert run_vplus(text)[1].error.code == msg.WRONG_TYPE
+    text = program("CALL sub(5)", name="main") + program("TYPE LAST(a[])", name="sub", params="a[]")
+    assert run_vplus(text)[1].error.code == msg.WRONG_TYPE

@@ -209,8 +209,10 @@ class ProgramCompiler(LibraryStatements):
         self.emit(2, f"rt.too_many_arguments({p.name!r}, len(_args))")
         for i, param in enumerate(p.params):
             local = self.pyname(param)
+            # Arguments "must match ... in number of arguments and data type" ([001] L510).
+            kind = "string" if param.name.startswith("$") else "array" if param.indices is not None else "value"
             self.emit(1, f"if len(_args) > {i} and _args[{i}] is not None:")
-            self.emit(2, f"{local} = _args[{i}]")
+            self.emit(2, f"{local} = _argument(_args[{i}], {kind!r}, {param.name!r})")
         self.targets = self.goto_targets(p.body)
         if any(_forces_jumps(t, self.targets) for t in _walk(p.body)):
             self.jump_table(p.body, 1)

@@ -205,9 +205,9 @@ class Task(TaskControl):
         return found
 
     def _locate(self, err: ProgramError, tb) -> ProgramError:
-        frames = self._frames(tb)
-        if frames:
-            compiled, lineno = frames[-1]
+        # The innermost step that has one: an error in a program's prologue
+        # (its arguments) belongs to the CALL that passed them.
+        for compiled, lineno in reversed(self._frames(tb)):
             statement = compiled.line_map.get(lineno)
             if statement is not None:
                 err.located(
@@ -215,6 +215,7 @@ class Task(TaskControl):
                     step=statement.step, program=compiled.name,
                     text=_source_line(compiled.file, statement.line),
                 )
+                break
         return err
 
     def _translate(self, err: Exception) -> ProgramError:

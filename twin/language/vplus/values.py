@@ -110,6 +110,18 @@ def _single(value) -> float:
         raise fail(msg.WRONG_TYPE, "real value expected") from None
 
 
+def _argument(value, kind: str, name: str):
+    """A CALL argument for parameter `name`: a string for a $ parameter, an
+    array for a[], a real or location (not a string) for the others."""
+    if kind == "array":
+        ok = isinstance(value, VArray)
+    else:
+        ok = isinstance(value, str) == (kind == "string") and not isinstance(value, VArray)
+    if not ok:
+        raise fail(msg.WRONG_TYPE, f"argument for {name}")
+    return value
+
+
 def _location(value) -> Location:
     if not isinstance(value, Location):
         raise fail(msg.WRONG_TYPE, "location expected")
