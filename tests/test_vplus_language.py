@@ -341,6 +341,7 @@ def test_run_time_errors_name_file_line_column_and_source_text():
     err = task.error
     assert (err.file, err.line, err.column, err.step, err.program) == ("test.pg", 3, 4, 3, "t")
     assert err.code == msg.UNDEFINED_VALUE and "undefined.z" in err.message
+    assert err.text == "   y = x + undefined.z"
 
 
 def test_declarations_must_come_before_the_first_executable_step():

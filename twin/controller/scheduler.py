@@ -42,9 +42,9 @@ NEXT_CYCLE = _Token("NEXT_CYCLE")
 class Runnable(Protocol):
     """What the scheduler needs of a task.  Optional, read with getattr:
     `priorities` (16 slice priorities), `paused` (not run, and not counted as
-    alive), `begin_cycle()` (called at the start of each major cycle) and
+    alive), `begin_cycle()` (called at the start of each major cycle),
     `interrupt_due()` (True: resume even though the wait is not over, to run
-    a reaction)."""
+    a reaction) and `scheduler` (set by `add`)."""
 
     generator: Iterator[Any]
     finished: bool
@@ -62,8 +62,10 @@ class Scheduler:
         self._answers: dict[int, tuple[int, bool]] = {}
 
     def add(self, task: Runnable) -> None:
-        """Add a task; it learns its scheduler, so that it can start others (EXECUTE)."""
-        task.scheduler = self
+        """Add a task; one with a `scheduler` attribute learns its scheduler,
+        so that it can start others (V+ EXECUTE)."""
+        if hasattr(task, "scheduler"):
+            task.scheduler = self
         self.tasks.append(task)
 
     @property

@@ -295,6 +295,7 @@ class Module:
     file: str
     programs: list[Program]
     data: list[DataSection]
+    lines: list[str] = field(default_factory=list)  # the source text, for error messages
 
 
 # ---------------------------------------------------- I/O and keyed statements

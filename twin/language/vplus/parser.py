@@ -297,7 +297,7 @@ def parse(text: str, file: str = "<string>") -> ast.Module:
             raise err.orig_exc.located(file=file) from None
         raise
     source_lines = text.splitlines()
-    module = ast.Module(file, [], [])
+    module = ast.Module(file, [], [], source_lines)
     for unit in units:
         unit.file = file
         if isinstance(unit, ast.Program):

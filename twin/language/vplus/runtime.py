@@ -97,6 +97,7 @@ class VPlusSystem:
         self.random = np.random.default_rng(seed)
         self.tasks: list[Task] = []  # every task started, in order; `task(n)` finds the current one
         self.robot_holder: Task | None = None  # the task the robot is attached to
+        self.sources: dict[str, list[str]] = {}  # file -> its lines, for error messages
         # Logical units; disk files live in `sandbox` (no disk when it is None).
         self.devices = Devices(sandbox, self.console)
         self.timers: dict[int, float] = {}  # TIMER n = value: the clock reading that timer n counts from
@@ -110,6 +111,7 @@ class VPlusSystem:
         return self._load_module(parse(text, file))
 
     def _load_module(self, module) -> list[str]:
+        self.sources[module.file] = module.lines
         names = []
         for program in module.programs:
             compiled = compile_program(program)
@@ -124,6 +126,10 @@ class VPlusSystem:
 
             load_data_section(section, self.globals)
         return names
+
+    def source_line(self, file: str, line: int) -> str | None:
+        lines = self.sources.get(file, [])
+        return lines[line - 1] if 0 < line <= len(lines) else None
 
     def define_location(self, name: str, location: Location) -> None:
         self.globals[normalize_name(name)] = location
@@ -213,7 +219,7 @@ class Task(TaskControl):
                 err.located(
                     file=compiled.file, line=statement.line, column=statement.column,
                     step=statement.step, program=compiled.name,
-                    text=_source_line(compiled.file, statement.line),
+                    text=self.system.source_line(compiled.file, statement.line),
                 )
                 break
         return err
@@ -333,13 +339,6 @@ class _RobotOfAnotherTask:
         if name in self._MOTION:
             return getattr(self._task.robot_for_motion(), name)
         return getattr(self._robot, name)
-
-
-def _source_line(file: str, line: int) -> str | None:
-    try:
-        return Path(file).read_text(encoding="latin-1").splitlines()[line - 1]
-    except (OSError, IndexError):
-        return None
 
 
 # The names the generated code sees.
