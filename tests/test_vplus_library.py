@@ -268,7 +268,7 @@ def test_disk_reads_fixed_records_and_directory_entries(tmp_path):
     (tmp_path / "data.txt").write_bytes(b"abc\r\nlast")
     (tmp_path / "fixed.dat").write_bytes(b"aaaa\0\0\0\0cc\0\0")
     system = run_ok('ATTACH (d, 4) "DISK"\nFOPENR (d, 4, 1) "fixed.dat"\nREAD (d, 3) $r3\nREAD (d, 1) $r1\n'
-                    'n = IOSTAT(d, 2)\nFCLOSE (d)\nFOPEND (d) "x.x"\nREAD (d) $e1\nREAD (d) $e2\nREAD (d) $e3\n'
+                    'n = IOSTAT(d, 2)\nFCLOSE (d)\nFOPEND (d) "*.*"\nREAD (d) $e1\nREAD (d) $e2\nREAD (d) $e3\n'
                     's3 = IOSTAT(d)\nFCLOSE (d)\nFOPENR (d) "data.txt"\nc1 = GETC(d)\nREAD (d) $rest\n'
                     'READ (d) $last\nREAD (d) $none\ns = IOSTAT(d)\nDETACH (d)', sandbox=tmp_path)
     g = system.globals
@@ -279,6 +279,17 @@ def test_disk_reads_fixed_records_and_directory_entries(tmp_path):
     assert g["s3"] == msg.UNEXPECTED_EOF
     assert (g["c1"], g["$rest"], g["$last"], g["s"]) == (ord("a"), "bc", "last", msg.UNEXPECTED_EOF)
     assert "$none" not in g  # a READ that fails leaves its variable alone
+
+
+def test_directory_listing_filters_by_pattern(tmp_path):
+    for name in ("a.txt", "b.dat", "c.TXT"):
+        (tmp_path / name).write_text("x")
+    system = run_ok('ATTACH (d, 4) "DISK"\nFOPEND (d) "*.txt"\nREAD (d) $e1\nREAD (d) $e2\nREAD (d) $e3\n'
+                    's = IOSTAT(d)\nFCLOSE (d)\nFOPENR (d) "*.txt"\nw = IOSTAT(d)', sandbox=tmp_path)
+    g = system.globals
+    assert [g["$e1"][:12], g["$e2"][:12]] == ["A       .TXT", "C       .TXT"]
+    assert g["s"] == msg.UNEXPECTED_EOF and "$e3" not in g
+    assert g["w"] == msg.INVALID_FILE_SPEC  # wildcards only for directories
 
 
 def test_disk_errors_go_to_iostat_and_the_program_goes_on(tmp_path):

@@ -21,6 +21,7 @@ IOSTAT(lun) returns (1 success, < 0 the error code), as the guides describe.
 
 from __future__ import annotations
 
+import fnmatch
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -171,11 +172,12 @@ class Devices:
             self.detach(*key)
 
     # ------------------------------------------------------------ disk files
-    def disk_path(self, spec: str) -> Path:
-        """`unit:path\\name.ext` -> a path inside the sandbox (case-insensitive)."""
+    def disk_path(self, spec: str, wildcards: bool = False) -> Path:
+        """`unit:path\\name.ext` -> a path inside the sandbox (case-insensitive).
+        With `wildcards` (FOPEND), the name may hold * and ?."""
         assert self.sandbox is not None
-        match = re.fullmatch(r"(?:([A-Za-z]):)?([\\/]?(?:[^\\/:*?\"<>|]+[\\/])*)([^\\/:*?\"<>|]*)", spec.strip())
-        if match is None or ".." in spec:
+        match = re.fullmatch(r"(?:([A-Za-z]):)?([\\/]?(?:[^\\/:*?\"<>|]+[\\/])*)([^\\/:\"<>|]*)", spec.strip())
+        if match is None or ".." in spec or (not wildcards and re.search(r"[*?]", match[3])):
             raise IoError(msg.INVALID_FILE_SPEC)
         unit, directory, name = match[1], match[2], match[3]
         base = self.sandbox / unit.upper() if unit else self.sandbox
@@ -198,13 +200,15 @@ class Devices:
             raise IoError(msg.FILE_ALREADY_OPEN)
         if self.open_files() >= MAX_OPEN_FILES:
             raise IoError(msg.DEVICE_NOT_READY)
-        path = self.disk_path(spec)
+        path = self.disk_path(spec, wildcards=mode == "D")
         handle = OpenFile(path, mode, record_length, random=bool(flags & RANDOM_ACCESS))
         if mode == "D":
-            folder = path if path.is_dir() else path.parent
+            # FOPEND "path\" or "path\*.*" lists a folder; "path\*.TXT" filters it.
+            folder, pattern = (path, "*") if path.is_dir() else (path.parent, path.name)
             if not folder.is_dir():
                 raise IoError(msg.NONEXISTENT_FILE)
-            handle.data = b"".join(_directory_record(p) + b"\r\n" for p in sorted(folder.iterdir()))
+            entries = [p for p in sorted(folder.iterdir()) if fnmatch.fnmatch(p.name.lower(), pattern.lower())]
+            handle.data = b"".join(_directory_record(p) + b"\r\n" for p in entries)
         elif mode == "R":
             if not path.is_file():
                 raise IoError(msg.NONEXISTENT_FILE)
