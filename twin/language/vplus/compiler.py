@@ -100,9 +100,6 @@ def is_string(expr: ast.Expr) -> bool:
     return False
 
 
-_LOOPS = (ast.For, ast.While, ast.DoUntil)
-
-
 def _bodies(s: ast.Statement) -> list[list[ast.Statement]]:
     if isinstance(s, ast.If):
         return [s.body, s.orelse]

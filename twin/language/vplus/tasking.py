@@ -92,7 +92,6 @@ class TaskControl:
         self.event = False
         self.scheduler = None  # set by Scheduler.add
         self.run_signal: int | None = None  # RUNSIG
-        self.state = "running"
 
     def _drive(self, args: list) -> Iterator:
         """The task's generator: its cycles, its reactions, its end."""
@@ -116,7 +115,6 @@ class TaskControl:
             self.last_error = self.error.code
         finally:
             self.finished = True
-            self.state = "error" if self.error is not None else "idle"
             self.detach_robot()
             if self.run_signal is not None:
                 self.io.signal(-self.run_signal)
@@ -284,9 +282,7 @@ class TaskControl:
     def pause(self):
         """PAUSE: the task stops where it is; `VPlusSystem.proceed` resumes it."""
         self.paused = True
-        self.state = "paused"
         yield lambda: not self.paused
-        self.state = "running"
 
     def runsig(self, signal) -> None:
         """RUNSIG signal: the signal is on while this task runs and goes off
