@@ -222,8 +222,13 @@ def test_prompt_reads_numbers_and_strings():
 
 
 def test_prompt_into_a_real_rejects_letters_and_end_of_input_stops():
-    # [000] L7119-7130: a wrong type "generates an error message and halts execution".
-    assert error_of('PROMPT "x? ", x', stdin="abc\n").code == msg.ILLEGAL_VALUE
+    # [000] L7119-7130: a wrong type "generates an error message and halts execution";
+    # the messages are those [000] L10362-10368 prints for "++97" and "11+1".
+    assert error_of('PROMPT "x? ", x', stdin="abc\n").code == msg.INVALID_NUMBER
+    assert error_of('PROMPT "x? ", x', stdin="++97\n").code == msg.INVALID_NUMBER
+    assert error_of('PROMPT "x? ", x', stdin="11+1\n").code == msg.UNEXPECTED_TEXT
+    assert error_of('PROMPT "x? ", x', stdin="nan\n").code == msg.INVALID_NUMBER
+    assert output_of(program('PROMPT "", x\nTYPE x'), stdin=" -1.5E2 \n") == "-150\n"
     assert error_of('PROMPT "x? ", x', stdin="").code == msg.UNEXPECTED_EOF
 
 

@@ -51,6 +51,9 @@ FILE_NOT_OPEN = -514  # twin-chosen
 NOT_ATTACHED = -516  # twin-chosen
 ALREADY_ATTACHED = -517  # twin-chosen
 INVALID_FILE_SPEC = -518  # twin-chosen
+# A number typed at a PROMPT (texts printed in [000] L10362-10368 for pendant input).
+INVALID_NUMBER = -455  # twin-chosen
+UNEXPECTED_TEXT = -456  # twin-chosen
 
 MESSAGES: dict[int, str] = {
     UNEXPECTED_EOF: "*Unexpected end of file*",
@@ -97,6 +100,8 @@ MESSAGES: dict[int, str] = {
     NOT_ATTACHED: "*Not attached to logical unit*",
     ALREADY_ATTACHED: "*Logical unit already attached*",
     INVALID_FILE_SPEC: "*Invalid file specification*",
+    INVALID_NUMBER: "*Invalid number format*",
+    UNEXPECTED_TEXT: "*Unexpected text at end of line*",
 }
 
 

@@ -26,6 +26,7 @@ from .compiler import CompiledProgram, compile_program
 from .fileio import Devices
 from .formats import _fmt, render
 from .keywords import FUNCTIONS, INSTRUCTIONS, STRING_FUNCTIONS
+from .keywords.strings import typed_number
 from .parser import normalize_name, parse, parse_file
 # Parameters and switches with the manuals' defaults and limits.
 from .settings import PARAMETER_DEFAULTS, SWITCH_DEFAULTS, in_range
@@ -299,10 +300,7 @@ class Task(TaskControl):
         return line
 
     def prompt_number(self, text: str) -> float:
-        try:
-            return float(text.strip())
-        except ValueError:
-            raise values.fail(msg.ILLEGAL_VALUE, f"not a number: {text!r}") from None
+        return typed_number(text)
 
     # ------------------------------------------------------------ settings
     def set_parameter(self, name: str, index, value) -> None:

@@ -26,6 +26,18 @@ def leading_number(text: str) -> float:
     return float(match.group(0)) if match else 0.0
 
 
+def typed_number(text: str) -> float:
+    """A number typed for PROMPT into a real: the whole entry must be one
+    number ([000] L10362-10368: "11+1" is *Unexpected text at end of line*,
+    "++97" *Invalid number format*)."""
+    match = _NUMBER.match(text)
+    if match is None:
+        raise fail(msg.INVALID_NUMBER, repr(text))
+    if text[match.end():].strip():
+        raise fail(msg.UNEXPECTED_TEXT, repr(text))
+    return float(match.group(0))
+
+
 def _position(start, text: str) -> int:
     """A 1-based character position as a 0-based index (0 means 1)."""
     return max(to_int(start) - 1, 0) if start is not None else 0
