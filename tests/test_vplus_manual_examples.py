@@ -10,6 +10,8 @@ which are re-joined).
 
 from __future__ import annotations
 
+import pytest
+
 from twin.controller.scheduler import Scheduler
 from twin.language.vplus import messages as msg
 
@@ -210,11 +212,14 @@ def test_menu_program_returns_on_selection_3():
     assert output_of(SUB_MENU, stdin="3\n") == MENU
 
 
-def test_menu_program_rejects_other_input_and_shows_the_menu_again():
-    """[000] L12278-12322: VAL("x") is 0, so ANY rings the bell and shows
-    "** Invalid input **" before the menu comes back."""
-    out = output_of(SUB_MENU, stdin="x\n3\n")
-    assert out == MENU + "\a\n** Invalid input **\n" + MENU
+@pytest.mark.parametrize("banner", ["** Invalid input **", "*** Invalid input ***"])
+def test_menu_program_rejects_other_input_and_shows_the_menu_again(banner):
+    """[000] L12278-12322 (and the eV+ copy, [001] L5048-5092, whose banner has
+    three asterisks): VAL("x") is 0, so ANY rings the bell and shows the banner
+    before the menu comes back."""
+    text = SUB_MENU.replace('"** Invalid input **"', f'"{banner}"')
+    out = output_of(text, stdin="x\n3\n")
+    assert out == MENU + f"\a\n{banner}\n" + MENU
 
 
 def test_menu_program_selection_1_calls_the_pick_and_place_program():
