@@ -474,3 +474,19 @@ END
     system, task = run_vplus(text)
     assert [t.error for t in system.tasks] == [None, None, None]
     assert system.globals["$log"] == "acbc" + "ac" * 3 + "b"
+
+
+@pytest.mark.parametrize("dialect, code", [("eV+", None), ("V+", msg.ROBOT_ATTACHED)])
+def test_task_0_attaches_the_robot_at_its_first_motion_in_ev_plus_at_its_start_in_v_plus(dialect, code):
+    """eV+ [001] L416: task 0 attaches the robot "as soon as a motion related
+    keyword is encountered"; V+ [000] L896-897: when task 0 begins.  Before
+    that, another task may ATTACH it."""
+    text = program("EXECUTE 1 taker()\nWAIT TASK(1, 1) <> 1", name="main") + program("ATTACH ()", name="taker")
+
+    def setup(system):
+        system.dialect = dialect
+
+    system, task = run_vplus(text, robot=RecordingRobot(), setup=setup)
+    taker = system.task(1)
+    assert task.error is None and taker.finished
+    assert (taker.error.code if taker.error else None) == code

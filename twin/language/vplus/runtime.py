@@ -98,6 +98,9 @@ class VPlusSystem:
         self.random = np.random.default_rng(seed)
         self.tasks: list[Task] = []  # every task started, in order; `task(n)` finds the current one
         self.robot_holder: Task | None = None  # the task the robot is attached to
+        # Where the guides differ, eV+ rules by default; "V+" selects the V+ v17
+        # ones (task 0 attaches the robot when it starts, [000] L899-905).
+        self.dialect = "eV+"
         self.sources: dict[str, list[str]] = {}  # file -> its lines, for error messages
         # Logical units; disk files live in `sandbox` (no disk when it is None).
         self.devices = Devices(sandbox, self.console)
@@ -190,6 +193,8 @@ class Task(TaskControl):
         self.finished = False
         self.init_control(cycles)
         self.generator = self._drive(args)
+        if number == 0 and system.dialect == "V+" and system.robot is not None and system.robot_holder is None:
+            system.robot_holder = self
 
     @property
     def robot(self):
