@@ -346,6 +346,19 @@ def test_serial_read_waits_for_a_whole_line():
     assert system.console.output == f"abc12\n{msg.NO_DATA}\n" and line.owner is None
 
 
+def test_getc_in_wait_mode_waits_for_a_byte():
+    # GETC(lun) without no-wait mode waits for the next byte ([000] "Serial I/O").
+    text = program('ATTACH (s, 4) "SERIAL:3"\nc = GETC(s)\nTYPE c, " ", GETC(s, 1)')
+    system, task = run_vplus(text, max_cycles=5)
+    assert not task.finished
+    system.devices.serial(3).feed("Z")
+    scheduler = Scheduler()
+    scheduler.add(task)
+    while scheduler.alive:
+        scheduler.run_cycle()
+    assert system.console.output == f"90 {msg.NO_DATA}\n"
+
+
 def test_getc_reads_bytes_from_a_serial_line():
     def feed(system):
         system.devices.serial(1).feed(b"A\x03")

@@ -6,12 +6,16 @@
   assigns them.  ATTACH (lun, 4) returns the unit it picked, written into lun,
   which may still be undefined before the statement.
 * `KeyedAssign`: `KEYWORD args = value` -> `I[name](rt, value, args...)`.
+* GETC(lun) in wait mode: a function cannot wait, so the step first waits
+  (`yield from`) until the unit has a byte, then runs; GETC finds it there.
 * Functions that assign to their first argument ($DECODE, TAS) return
   (result, new value); the expression stores the new value with `:=`, so an
   AUTO variable (a Python local) can be written from inside an expression.
 """
 
 from __future__ import annotations
+
+import dataclasses
 
 from ...errors import ProgramError
 from . import ast
@@ -21,6 +25,18 @@ from .keywords import INSTRUCTIONS, NAME_ARGUMENTS, WRITES_FIRST_ARGUMENT
 FORMAT_ARGUMENTS = {"$ENCODE"}  # arguments are TYPE items: expressions and /I0, /F8.3 ...
 ARRAY_ARGUMENTS = {"$UNPACK"}  # the first argument $a[i] is passed as (array, index)
 LIBRARY_CALLS = WRITES_FIRST_ARGUMENT | NAME_ARGUMENTS | FORMAT_ARGUMENTS | ARRAY_ARGUMENTS
+
+
+def _calls(node, name: str):
+    """The calls of `name` in a simple statement's expressions."""
+    if isinstance(node, ast.Call) and node.name == name:
+        yield node
+    if isinstance(node, list):
+        for item in node:
+            yield from _calls(item, name)
+    elif dataclasses.is_dataclass(node):
+        for f in dataclasses.fields(node):
+            yield from _calls(getattr(node, f.name), name)
 
 
 class LibraryStatements:
@@ -70,6 +86,13 @@ class LibraryStatements:
             else:
                 args.append(self.expr(a))
         self.emit(depth, f"I[{s.name!r}](rt, {self.expr(s.value)}{''.join(', ' + a for a in args)})")
+
+    def wait_for_input(self, s: ast.Statement, depth: int) -> None:
+        """Called for simple statements only (not for IF/WHILE/... heads)."""
+        for call in _calls(s, "GETC"):
+            mode = call.args[1] if len(call.args) > 1 else None
+            if call.args and call.args[0] is not None and (mode is None or (isinstance(mode, ast.Num) and mode.value == 0)):
+                self.emit(depth, f"yield from rt.system.devices.wait_for_byte(rt, {self.expr(call.args[0])})")
 
     # ----------------------------------------------------------- references
     def peek(self, var: ast.Var) -> str:

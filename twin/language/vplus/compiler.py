@@ -407,6 +407,7 @@ class ProgramCompiler(LibraryStatements):
         # A step's error goes to the task's REACTE routine, if it has one; the
         # try costs nothing until something raises (Python 3.11).
         self.emit(depth, "try:")
+        self.wait_for_input(s, depth + 1)  # GETC in wait mode: see compile_library.py
         handler(s, depth + 1)
         self.current = s
         self.emit(depth, "except _TRAPPED as _error:")

@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Callable
 
 from . import messages as msg
+from .values import to_int
 
 TERMINAL_LUN = 4
 DISK_LUNS = range(5, 15)  # handed out by ATTACH (lun, 4) "DISK"
@@ -329,14 +330,20 @@ class Devices:
         self.last_length[(task, lun)] = len(text)
         return text
 
+    def wait_for_byte(self, rt, lun):
+        """Before a step with GETC(lun) in wait mode: wait while the unit is a
+        serial line with nothing received (any other case GETC answers at once)."""
+        unit = self.units.get((rt.number, to_int(lun)))
+        while unit is not None and unit.serial is not None and not unit.serial.received:
+            yield rt.SLICE
+
     def getc(self, task: int, lun: int, no_wait: bool) -> int:
         """GETC: the next byte, CR, LF and Ctrl-Z included, or a negative error code."""
         try:
             unit = self.unit(task, lun)
             if unit.serial is not None:
                 if not unit.serial.received:
-                    # Functions cannot wait: an empty line answers *No data received*
-                    # whether or not no-wait mode was asked for.
+                    # No-wait mode, or a GETC whose step could not wait first.
                     raise IoError(msg.NO_DATA)
                 byte = unit.serial.received.pop(0)
             elif unit.device == "TERMINAL":
