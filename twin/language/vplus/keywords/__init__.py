@@ -1,6 +1,7 @@
 """The V+ keyword tables: instructions and functions, name -> implementation.
 
-One module per domain (motion, program, numbers, strings, locations); each
+One module per domain (motion, program, numbers, strings, locations, system:
+switches, parameters, timers and signals, files: logical-unit I/O); each
 registers its keywords with the decorators below when it is imported.
 
 Like the controller's own keyword tables, a name is looked up here when the
