@@ -18,6 +18,66 @@ from twin.language.vplus.parser import parse
 from vplus_helpers import output_of, run_vplus
 
 
+LOOPS_WITH_EXIT_AND_NEXT = """
+FOR i = 1 TO 6
+  IF i == 2 THEN
+    NEXT
+  END
+  IF i == 5 THEN
+    EXIT
+  END
+  TYPE i, /S
+END
+TYPE " ", i, /S
+n = 0
+WHILE n < 10 DO
+  n = n + 1
+  IF n MOD 2 == 1 THEN
+    NEXT
+  END
+  IF n > 6 THEN
+    EXIT
+  END
+  TYPE n, /S
+END
+TYPE " ", /S
+k = 0
+DO
+  k = k + 1
+  IF k == 2 THEN
+    NEXT
+  END
+  TYPE k, /S
+UNTIL k >= 4
+TYPE
+"""
+
+NESTED_BLOCKS = """
+FOR i = 1 TO 4
+  CASE i OF
+    VALUE 1, 3:
+      j = 0
+      WHILE j < i DO
+        j = j + 1
+        IF j == 2 THEN
+          NEXT
+        ELSE
+          TYPE i * 10 + j, /S
+        END
+      END
+    VALUE 2:
+      DO
+        i = i + 0
+        TYPE "d", /S
+      UNTIL TRUE
+    ANY
+      TYPE "any", /S
+  END
+END
+TYPE
+"""
+
+
 def program(body: str, name: str = "t", params: str = "") -> str:
     return f".PROGRAM {name}({params})\n{body}\n.END\n"
 
@@ -149,40 +209,7 @@ def test_run_time_error_after_a_goto_names_its_step():
 
 def test_exit_and_next_in_every_loop_kind():
     """EXIT leaves the innermost loop, NEXT starts its next pass ([000] L5043, L5106)."""
-    body = """
-FOR i = 1 TO 6
-  IF i == 2 THEN
-    NEXT
-  END
-  IF i == 5 THEN
-    EXIT
-  END
-  TYPE i, /S
-END
-TYPE " ", i, /S
-n = 0
-WHILE n < 10 DO
-  n = n + 1
-  IF n MOD 2 == 1 THEN
-    NEXT
-  END
-  IF n > 6 THEN
-    EXIT
-  END
-  TYPE n, /S
-END
-TYPE " ", /S
-k = 0
-DO
-  k = k + 1
-  IF k == 2 THEN
-    NEXT
-  END
-  TYPE k, /S
-UNTIL k >= 4
-TYPE
-"""
-    assert output_of(program(body)) == "134 5246 134\n"
+    assert output_of(program(LOOPS_WITH_EXIT_AND_NEXT)) == "134 5246 134\n"
 
 
 def test_exit_with_a_level_leaves_several_loops():
@@ -283,3 +310,61 @@ ELSE
 END
 """
     assert output_of(program(body)) == "Part not picked up.\n"
+
+
+def test_lowered_while_do_and_case_blocks_with_exit_and_next():
+    """Blocks that hold a GOTO run as jumps; EXIT/NEXT inside them, and a
+    structured IF inside a lowered loop, still find their loop."""
+    body = """
+n = 0
+WHILE n < 10 DO
+  n = n + 1
+  IF n == 2 GOTO 30
+  IF n == 7 THEN
+    EXIT
+  END
+  CASE n OF
+    VALUE 4:
+      NEXT
+    VALUE 5:
+      GOTO 40
+  END
+  TYPE n, /S
+30 END
+40 TYPE " n=", n, /S
+k = 0
+DO
+  k = k + 1
+  IF k == 2 GOTO 50
+  IF k == 3 THEN
+    NEXT
+  END
+  TYPE k, /S
+50 UNTIL k >= 4
+TYPE
+"""
+    out = output_of(program(body))
+    assert out == "13 n=514\n"
+    assert "_pc" in compiled_source(program(body))
+
+
+_OPENERS = ("IF ", "ELSE", "FOR ", "WHILE ", "DO", "VALUE ", "ANY")
+
+
+def with_untaken_gotos(body: str) -> str:
+    """The same program with an `IF FALSE GOTO` in every block, so that the
+    compiler lowers every block to jumps; what it prints must not change."""
+    lines = []
+    for line in body.splitlines():
+        lines.append(line)
+        word = line.strip().upper()
+        if word.startswith(_OPENERS) and " GOTO " not in word:
+            lines.append("IF FALSE GOTO 9999")
+    return "\n".join(lines) + "\n9999 TYPE \"\", /S"
+
+
+@pytest.mark.parametrize("body", [LOOPS_WITH_EXIT_AND_NEXT, NESTED_BLOCKS])
+def test_lowered_blocks_behave_as_structured_ones(body):
+    structured, lowered = program(body), program(with_untaken_gotos(body))
+    assert "_pc" not in compiled_source(structured) and "_pc" in compiled_source(lowered)
+    assert output_of(lowered) == output_of(structured)

@@ -612,10 +612,10 @@ class ProgramCompiler(LibraryStatements):
         ops.append(_Op("mark", s, target=next_))
 
     def lower_While(self, s: ast.While, ops: list[_Op]) -> None:
-        top, end = self.mark(), self.mark()
+        top, next_, end = self.mark(), self.mark(), self.mark()
         ops.append(_Op("mark", s, target=top))
         ops.append(_Op("branch", s, target=end, condition=f"not {self.condition(s.condition)}"))
-        self.lower_loop(s, ops, top, end)
+        self.lower_loop(s, ops, next_, end)
         ops.append(_Op("jump", s, target=top))
         ops.append(_Op("mark", s, target=end))
 

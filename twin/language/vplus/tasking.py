@@ -271,7 +271,7 @@ class TaskControl:
         if task is self or (not task.finished and not task.paused):
             raise values.fail(msg.TASK_RUNNING, f"task {task.number}")
         task.generator.close()
-        task.finished = True
+        task.ended()  # its units are detached and its files closed ([000] L7480-7481)
 
     def cycle_end(self, number=None) -> None:
         """CYCLE.END [task]: the task stops at the end of its current cycle."""
