@@ -52,6 +52,30 @@ UNTIL k >= 4
 TYPE
 """
 
+FOR_EXAMPLES = """
+FOR i = 2 TO 32
+  $names[i] = $CHR(64 + i)
+END
+FOR i = 2 TO 32 STEP 2
+  TYPE $names[i], /S
+END
+TYPE
+FOR i = 1 TO 10
+  FOR j = 1 to 10
+    values[i,j] = i * j
+  END
+END
+FOR i = 1 TO 10
+  FOR j = 1 to 10
+    TYPE values[i,j], /S
+  END
+  TYPE " ", /C1
+END
+FOR i = 10 TO 1 STEP -1
+  TYPE i
+END
+"""
+
 NESTED_BLOCKS = """
 FOR i = 1 TO 4
   CASE i OF
@@ -238,30 +262,7 @@ def test_exit_outside_a_loop_is_a_control_structure_error():
 
 def test_for_examples_of_the_manual():
     """[000] L4856-4885: even elements of $names, a 10x10 grid, a countdown."""
-    body = """
-FOR i = 2 TO 32
-  $names[i] = $CHR(64 + i)
-END
-FOR i = 2 TO 32 STEP 2
-  TYPE $names[i], /S
-END
-TYPE
-FOR i = 1 TO 10
-  FOR j = 1 to 10
-    values[i,j] = i * j
-  END
-END
-FOR i = 1 TO 10
-  FOR j = 1 to 10
-    TYPE values[i,j], /S
-  END
-  TYPE " ", /C1
-END
-FOR i = 10 TO 1 STEP -1
-  TYPE i
-END
-"""
-    lines = output_of(program(body)).split("\n")
+    lines = output_of(program(FOR_EXAMPLES)).split("\n")
     assert lines[0] == "".join(chr(64 + i) for i in range(2, 33, 2))
     # Each row ends with " " and /C1: one blank line between rows.
     assert lines[1:21:2] == ["".join(str(i * j) for j in range(1, 11)) + " " for i in range(1, 11)]
@@ -363,7 +364,7 @@ def with_untaken_gotos(body: str) -> str:
     return "\n".join(lines) + "\n9999 TYPE \"\", /S"
 
 
-@pytest.mark.parametrize("body", [LOOPS_WITH_EXIT_AND_NEXT, NESTED_BLOCKS])
+@pytest.mark.parametrize("body", [LOOPS_WITH_EXIT_AND_NEXT, NESTED_BLOCKS, FOR_EXAMPLES])
 def test_lowered_blocks_behave_as_structured_ones(body):
     structured, lowered = program(body), program(with_untaken_gotos(body))
     assert "_pc" not in compiled_source(structured) and "_pc" in compiled_source(lowered)
