@@ -440,3 +440,8 @@ def test_graphics_statements_of_the_manual_parse_and_report_the_absent_window():
     out = output_of(program('GSLIDE (20, 0) 1 = 10, 20, 100, 50, 1, 0\nTYPE IOSTAT(20)\n'
                             'GPANEL (20, 0) 100, 100, 45, 45\nGETEVENT (20) event[]\nTYPE IOSTAT(20)'))
     assert out == f"{msg.NOT_ATTACHED}\n{msg.NOT_ATTACHED}\n"
+
+
+def test_getc_on_the_terminal_returns_the_typed_characters_then_cr():
+    out = output_of(program("ATTACH (4)\nTYPE GETC(4), GETC(4), GETC(4), GETC(4)"), stdin="ab\n")
+    assert out == f"979813{msg.UNEXPECTED_EOF}\n"

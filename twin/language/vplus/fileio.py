@@ -101,6 +101,7 @@ class Devices:
         self.units: dict[tuple[int, int], Unit] = {}
         self.status: dict[tuple[int, int], int] = {}
         self.last_length: dict[tuple[int, int], int] = {}
+        self.typed = bytearray()  # terminal input GETC has not taken yet (RETURN is CR)
 
     # ------------------------------------------------------------ state
     def serial(self, number: int) -> SerialLine:
@@ -347,7 +348,12 @@ class Devices:
                     raise IoError(msg.NO_DATA)
                 byte = unit.serial.received.pop(0)
             elif unit.device == "TERMINAL":
-                raise IoError(msg.NO_DATA)
+                if not self.typed:
+                    line = self.console.read_line()  # the terminal hands over whole lines
+                    if line is None:
+                        raise IoError(msg.UNEXPECTED_EOF)
+                    self.typed += (line + "\r").encode("latin-1", errors="replace")
+                byte = self.typed.pop(0)
             else:
                 handle = self._file(task, lun)
                 data = handle.content()
