@@ -366,3 +366,13 @@ def test_an_argument_of_the_wrong_data_type_is_an_error():
     assert run_vplus(text)[1].error.code == msg.WRONG_TYPE
     text = program("CALL sub(5)", name="main") + program("TYPE LAST(a[])", name="sub", params="a[]")
     assert run_vplus(text)[1].error.code == msg.WRONG_TYPE
+
+
+@pytest.mark.parametrize("literal", ["^B111111111", "^B102", "^89", "^D1.2.3"])
+def test_a_bad_numeric_literal_is_a_syntax_error(literal):
+    """[000] L3895-3910: ^B takes at most 8 binary digits; each radix its own digits."""
+    with pytest.raises(ProgramError) as info:
+        parse(program(f"x = 1\ny = {literal}"), "bad.pg")
+    err = info.value
+    assert (err.code, err.file, err.line, err.column) == (msg.SYNTAX_ERROR, "bad.pg", 3, 5)
+    assert err.text == f"y = {literal}"

@@ -35,8 +35,12 @@ def normalize_name(text: str) -> str:
     return prefix + text[len(prefix) :][:NAME_LENGTH]
 
 
+BINARY_DIGITS = 8  # "^B ... binary (maximum of 8 bits)", [000] L3903-3905
+
+
 def parse_number(text: str) -> float:
-    """Decimal, ^H hex, ^B binary, ^D double and plain ^ octal constants."""
+    """Decimal, ^H hex, ^B binary, ^D double and plain ^ octal constants;
+    ValueError for digits the radix does not have."""
     if not text.startswith("^"):
         return float(text)
     body = text[1:]
@@ -44,6 +48,8 @@ def parse_number(text: str) -> float:
     if radix is None:
         return float(int(body, 8))
     body = body[1:]
+    if radix == 2 and len(body) > BINARY_DIGITS:
+        raise ValueError(f"more than {BINARY_DIGITS} binary digits")
     return float(body) if radix == 10 else float(int(body, radix))
 
 
@@ -58,7 +64,12 @@ class _ToAst(Transformer):
     # ---- expressions
     def number(self, meta, children):
         text = str(children[0])
-        return ast.Num(parse_number(text), double=text[:2].upper() == "^D")
+        try:
+            value = parse_number(text)
+        except ValueError:
+            raise ProgramError(f"{msg.message(msg.SYNTAX_ERROR)} bad number {text}", msg.SYNTAX_ERROR,
+                               line=meta.line, column=meta.column) from None
+        return ast.Num(value, double=text[:2].upper() == "^D")
 
     def string(self, meta, children):
         return ast.Str(str(children[0])[1:-1])
@@ -294,7 +305,9 @@ def parse(text: str, file: str = "<string>") -> ast.Module:
         raise _syntax_error(err, text, file) from None
     except VisitError as err:
         if isinstance(err.orig_exc, ProgramError):
-            raise err.orig_exc.located(file=file) from None
+            line = err.orig_exc.line
+            source = text.splitlines()[line - 1] if line else None
+            raise err.orig_exc.located(file=file, text=source) from None
         raise
     source_lines = text.splitlines()
     module = ast.Module(file, [], [], source_lines)
