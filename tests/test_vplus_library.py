@@ -445,3 +445,8 @@ def test_graphics_statements_of_the_manual_parse_and_report_the_absent_window():
 def test_getc_on_the_terminal_returns_the_typed_characters_then_cr():
     out = output_of(program("ATTACH (4)\nTYPE GETC(4), GETC(4), GETC(4), GETC(4)"), stdin="ab\n")
     assert out == f"979813{msg.UNEXPECTED_EOF}\n"
+
+
+def test_vision_instructions_load_and_stop_when_run():
+    assert error_of("VPICTURE (1)").code == msg.DEVICE_NOT_READY
+    assert error_of("x = VFEATURE(1)").code == msg.DEVICE_NOT_READY

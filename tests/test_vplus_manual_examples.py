@@ -649,3 +649,56 @@ def test_display_example_types_etx_records_until_an_empty_one():
             scheduler.run_cycle()
     assert task.finished and task.error is None
     assert system.console.output == "ABC\nDEF\n\n" and line.owner is None
+
+
+# [000] L9452-9492 "label.blob()"; [001] L4088-4123.
+LABEL_BLOB = r"""
+.PROGRAM label.blob()
+
+; ABSTRACT: This program demonstrates how to attach to the
+; vision window and how to use the millimeter scaling mode of
+; the GTRANS instruction to label a "blob" in the vision
+; window.
+;
+
+AUTO vlun
+cam = 1
+; Attach the vision window and get a logical unit number
+ATTACH (vlun, 4) "GRAPHICS"
+IF IOSTAT(vlun) < 0 GOTO 100
+FOPEN (vlun) "Vision" ;Open the vision window
+IF IOSTAT(vlun) < 0 GOTO 100
+; Select display mode and graphics mode
+VDISPLAY (cam) 1, 1 ;Display grayscale frame and graphics
+; Take a picture and locate an object
+VPICTURE (cam) ;Take a processed picture
+VLOCATE (cam, 2) "?" ;Attempt to locate an object
+IF VFEATURE(1) THEN ;If an object was found...
+
+GCOLOR (vlun) 1 ;Select the color black
+GTRANS (vlun, 2) ;Select millimeter scaling
+GTYPE (vlun) DX(vis.loc), DY(vis.loc), "Blob", 3
+
+ELSE ;Else if object was NOT found...
+GCOLOR (vlun) 3 ;Select the color red
+GTRANS (vlun, 0) ;Select pixel scaling
+GTYPE (vlun) 100, 100, "No object found!", 3
+
+END
+; Detach (frees up the communications path)
+DETACH (vlun)
+
+100 IF (IOSTAT(vlun) < 0) THEN ; Check for errors
+TYPE $ERROR(IOSTAT(vlun))
+
+END
+
+.END
+"""
+
+
+def test_label_blob_without_graphics_reports_the_attach_error():
+    """[000] L9452-9492: without a graphics system (the eV+ v2 case, and the
+    twin's), ATTACH fails, GOTO 100 and the error text is typed; the vision
+    instructions are never reached."""
+    assert output_of(LABEL_BLOB) == "*Device not ready*\n"

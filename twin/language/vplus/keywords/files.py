@@ -208,6 +208,16 @@ for _name in ("PDNT.WRITE", "PDNT.NOTIFY", "PDNT.CLEAR"):
     instruction(_name)(_no_pendant)
 
 
+def _no_camera(rt, *args):
+    # The vision option ([000] "label.blob()"): the twin's cell has no camera.
+    raise fail(msg.DEVICE_NOT_READY, "no vision system is installed")
+
+
+for _name in ("VDISPLAY", "VPICTURE", "VLOCATE"):
+    instruction(_name)(_no_camera)
+function("VFEATURE")(_no_camera)
+
+
 @instruction("SETDEVICE")
 def _setdevice(rt, unit: tuple, items: tuple):
     raise fail(msg.DEVICE_NOT_READY, "no external encoder is installed")
