@@ -450,3 +450,8 @@ def test_getc_on_the_terminal_returns_the_typed_characters_then_cr():
 def test_vision_instructions_load_and_stop_when_run():
     assert error_of("VPICTURE (1)").code == msg.DEVICE_NOT_READY
     assert error_of("x = VFEATURE(1)").code == msg.DEVICE_NOT_READY
+
+
+def test_attach_mode_4_ignores_the_old_value_of_the_unit_variable(tmp_path):
+    system = run_ok('d = 0\nATTACH (d, 4) "DISK"\ns = IOSTAT(d)', sandbox=tmp_path)
+    assert (system.globals["d"], system.globals["s"]) == (5.0, 1.0)

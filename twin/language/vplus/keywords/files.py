@@ -11,9 +11,9 @@ from __future__ import annotations
 from .. import messages as msg
 from ..fileio import RETURN_LUN, TERMINAL_LUN, IoError
 from ..formats import render
-from .strings import leading_number
 from ..values import MAX_STRING, _str, fail, to_int
 from . import function, instruction
+from .strings import leading_number
 
 ROBOT_LUN = 0
 
@@ -32,23 +32,23 @@ def _attach(rt, unit: tuple, items: tuple):
     mode = _arg(unit, 1)
     device = _str(items[0]).strip().upper() if items else None
     lun = unit[0] if unit else None
-    if lun is None and not mode & RETURN_LUN or lun is not None and to_int(lun) == ROBOT_LUN:
+    if not mode & RETURN_LUN and (lun is None or to_int(lun) == ROBOT_LUN):
         rt.attach_robot()  # ATTACH () / (0): the robot (tasking.py)
         return None
     devices = _devices(rt)
     if device is None:
-        device = "TERMINAL" if to_int(lun) == TERMINAL_LUN else "PENDANT"
+        device = "TERMINAL" if lun is not None and to_int(lun) == TERMINAL_LUN else "PENDANT"
     if mode & RETURN_LUN:
         try:
             number = devices.free_lun(rt.number, device)
         except IoError:
-            return None  # no unit free; IOSTAT of the old value of lun is unchanged
+            return None  # every unit of the kind is taken: lun is left as it was
     else:
         number = to_int(lun)
     devices.run(rt.number, number, devices.attach, device)
-    unit = devices.units.get((rt.number, number))
-    if unit is not None and unit.serial is not None:
-        unit.serial.listener = rt.set_event  # arriving bytes wake WAIT.EVENT
+    attached = devices.units.get((rt.number, number))
+    if attached is not None and attached.serial is not None:
+        attached.serial.listener = rt.set_event  # arriving bytes wake WAIT.EVENT
     return float(number) if mode & RETURN_LUN else None
 
 
