@@ -376,3 +376,23 @@ def test_a_bad_numeric_literal_is_a_syntax_error(literal):
     err = info.value
     assert (err.code, err.file, err.line, err.column) == (msg.SYNTAX_ERROR, "bad.pg", 3, 5)
     assert err.text == f"y = {literal}"
+
+
+@pytest.mark.parametrize("body, code", [
+    ("a[-1] = 1", msg.ILLEGAL_ARRAY_INDEX),  # [000] L3987: indices start at 0
+    ("x = 1E39", msg.OVERFLOW),  # beyond a single-precision real
+    ("LOCK", msg.INVALID_ARGUMENT),
+    ("x = PRIORITY(1)", msg.INVALID_ARGUMENT),
+    ("EXIT 0", msg.INVALID_ARGUMENT),
+])
+def test_load_time_errors_name_file_line_and_text(body, code):
+    with pytest.raises(ProgramError) as info:
+        run_vplus(program(f"y = 0\n{body}"))
+    err = info.value
+    assert (err.code, err.file, err.line, err.program, err.text) == (code, "test.pg", 3, "t", body)
+
+
+def test_case_takes_a_real():
+    """[000] L4775: the CASE target must be a real or an integer."""
+    system, task = run_vplus(program('CASE "a" OF\n  VALUE 1:\n    TYPE 1\nEND'))
+    assert task.error.code == msg.WRONG_TYPE and task.error.line == 2

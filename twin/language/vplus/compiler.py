@@ -33,6 +33,7 @@ basic block, and programs without GOTO keep the structured form entirely.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 from ...errors import ProgramError
@@ -49,14 +50,17 @@ SLICE_ITERATIONS = 1024
 MAX_DIMENSIONS = 3  # arrays have one to three dimensions ([000] L3987-4045)
 
 # Program-interrupt and task instructions, carried out by the task itself
-# (tasking.TaskControl): keyword -> (method of rt, whether it may wait).
+# (tasking.TaskControl): keyword -> (method of rt, whether it may wait,
+# fewest and most arguments).
 _TASK_INSTRUCTIONS = {
-    "LOCK": ("lock", True), "IGNORE": ("ignore", False), "ABORT": ("abort", False),
-    "KILL": ("kill", False), "CYCLE.END": ("cycle_end", False), "PAUSE": ("pause", True),
-    "SET.EVENT": ("set_event", False), "CLEAR.EVENT": ("clear_event", False),
-    "WAIT.EVENT": ("wait_event", True), "RELEASE": ("release", True), "RUNSIG": ("runsig", False),
+    "LOCK": ("lock", True, 1, 1), "IGNORE": ("ignore", False, 1, 1), "ABORT": ("abort", False, 0, 1),
+    "KILL": ("kill", False, 1, 1), "CYCLE.END": ("cycle_end", False, 0, 1), "PAUSE": ("pause", True, 0, 0),
+    "SET.EVENT": ("set_event", False, 0, 1), "CLEAR.EVENT": ("clear_event", False, 0, 1),
+    "WAIT.EVENT": ("wait_event", True, 0, 2), "RELEASE": ("release", True, 0, 1),
+    "RUNSIG": ("runsig", False, 1, 1),
 }
-_TASK_FUNCTIONS = {"PRIORITY": "priority", "TASK": "task_info", "GET.EVENT": "get_event"}
+# keyword -> (method of rt, fewest and most arguments)
+_TASK_FUNCTIONS = {"PRIORITY": ("priority", 0, 0), "TASK": ("task_info", 0, 2), "GET.EVENT": ("get_event", 0, 1)}
 # Block statements and steps that only steer the flow are not wrapped for the
 # error trap (REACTE): an error trap resumes at the step after a failing one.
 _UNTRAPPED = (ast.If, ast.For, ast.While, ast.DoUntil, ast.Case, ast.Declare, ast.LabelOnly)
@@ -267,8 +271,11 @@ class ProgramCompiler(LibraryStatements):
             raise self.error(self.current, msg.ILLEGAL_ARRAY_INDEX, f"{len(indices)} dimensions (at most 3)")
         parts = []
         for e in indices:
-            if isinstance(e, ast.Num) and float(e.value).is_integer():
-                parts.append(str(int(e.value)))
+            if isinstance(e, ast.Num):  # rounded now, as _ix rounds at run time
+                index = math.floor(e.value + 0.5)
+                if index < 0:
+                    raise self.error(self.current, msg.ILLEGAL_ARRAY_INDEX, str(index))
+                parts.append(str(index))
             else:
                 parts.append(f"_ix({self.expr(e)})")
         return parts[0] if len(parts) == 1 else "(" + ", ".join(parts) + ")"
@@ -297,12 +304,17 @@ class ProgramCompiler(LibraryStatements):
     def expr(self, e: ast.Expr) -> str:
         if isinstance(e, ast.Num):
             # A constant is a single-precision real unless written ^D ([000] L3895-3910).
-            return repr(float(e.value) if e.double else single(e.value))
+            if e.double:
+                return repr(float(e.value))
+            try:
+                return repr(single(e.value))
+            except OverflowError:
+                raise self.error(self.current, msg.OVERFLOW, f"{e.value:g} is beyond single precision") from None
         if isinstance(e, ast.Str):
             return repr(e.value)
         if isinstance(e, ast.Var):
             if e.indices is None and e.name.upper() in _TASK_FUNCTIONS:
-                return f"rt.{_TASK_FUNCTIONS[e.name.upper()]}()"
+                return self.call(ast.Call(e.name.upper(), []))
             if e.indices is None and e.name.upper() in FUNCTIONS and not e.name.startswith("#"):
                 return self.call(ast.Call(e.name.upper(), []))
             if e.indices is None and e.name.upper() in STRING_FUNCTIONS:
@@ -367,7 +379,9 @@ class ProgramCompiler(LibraryStatements):
         if e.name == "DEFINED":
             return self.defined(e)
         if e.name in _TASK_FUNCTIONS:
-            return f"rt.{_TASK_FUNCTIONS[e.name]}({self.arguments(e.args)})"
+            method, fewest, most = _TASK_FUNCTIONS[e.name]
+            self.argument_count(e.name, e.args, fewest, most)
+            return f"rt.{method}({self.arguments(e.args)})"
         if e.name in LIBRARY_CALLS:
             return self.library_call(e)  # $DECODE, TAS, PARAMETER(name): see compile_library.py
         table = STRING_FUNCTIONS if e.name.startswith("$") else FUNCTIONS
@@ -531,7 +545,7 @@ class ProgramCompiler(LibraryStatements):
 
     def s_Case(self, s: ast.Case, depth: int) -> None:
         subject = self.fresh("case")
-        self.emit(depth, f"{subject} = {self.expr(s.subject)}")
+        self.emit(depth, f"{subject} = _real({self.expr(s.subject)})")  # CASE takes a real ([000] L4775)
         keyword = "if"
         for values, body in s.cases:
             tests = " or ".join(f"{subject} == {self.expr(v)}" for v in values)
@@ -640,7 +654,7 @@ class ProgramCompiler(LibraryStatements):
 
     def lower_Case(self, s: ast.Case, ops: list[_Op]) -> None:
         subject, end = self.fresh("case"), self.mark()
-        ops.append(_Op("code", s, emit=lambda depth: self.emit(depth, f"{subject} = {self.expr(s.subject)}")))
+        ops.append(_Op("code", s, emit=lambda depth: self.emit(depth, f"{subject} = _real({self.expr(s.subject)})")))
         entries = []
         for values, body in s.cases:
             entry = self.mark()
@@ -753,6 +767,11 @@ class ProgramCompiler(LibraryStatements):
         rotation = self.expr(s.rotation) if s.rotation is not None else "None"
         self.emit(depth, f"rt.set_speed({self.expr(s.value)}, {rotation}, {tuple(s.modifiers)!r})")
 
+    def argument_count(self, name: str, args: list, fewest: int, most: int) -> None:
+        if not fewest <= len(args) <= most or any(a is None for a in args[:fewest]):
+            raise self.error(self.current, msg.INVALID_ARGUMENT,
+                             f"{name} takes {fewest}{'' if most == fewest else f' to {most}'} argument(s)")
+
     def arguments(self, args: list) -> str:
         return ", ".join("None" if a is None else self.expr(a) for a in args)
 
@@ -776,7 +795,8 @@ class ProgramCompiler(LibraryStatements):
             self.reaction(s, depth)
             return
         if name in _TASK_INSTRUCTIONS:
-            method, waits = _TASK_INSTRUCTIONS[name]
+            method, waits, fewest, most = _TASK_INSTRUCTIONS[name]
+            self.argument_count(name, s.args, fewest, most)
             call = f"rt.{method}({self.arguments(s.args)})"
             self.emit(depth, f"yield from {call}" if waits else call)
             return

@@ -118,7 +118,11 @@ class VPlusSystem:
         self.sources[module.file] = module.lines
         names = []
         for program in module.programs:
-            compiled = compile_program(program)
+            try:
+                compiled = compile_program(program)
+            except ProgramError as err:
+                err.located(file=program.file, program=program.name)
+                raise err.located(text=self.source_line(program.file, err.line or 0)) from None
             namespace = dict(_NAMESPACE)
             code = compile(compiled.source, f"<vplus:{program.name}>", "exec")
             exec(code, namespace)

@@ -149,9 +149,13 @@ def _defined_element(table: dict, key: str, index) -> float:
 
 
 def _program_name(value) -> str:
+    """CALLS: the program named by a string."""
     from .parser import normalize_name
 
-    return normalize_name(_str(value).strip())
+    name = _str(value).strip()
+    if not name:
+        raise fail(msg.UNDEFINED_PROGRAM, "empty program name")
+    return normalize_name(name)
 
 
 def truth(value) -> float:
