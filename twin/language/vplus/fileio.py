@@ -338,7 +338,7 @@ class Devices:
         while unit is not None and unit.serial is not None and not unit.serial.received:
             yield rt.SLICE
 
-    def getc(self, task: int, lun: int, no_wait: bool) -> int:
+    def getc(self, task: int, lun: int) -> int:
         """GETC: the next byte, CR, LF and Ctrl-Z included, or a negative error code."""
         try:
             unit = self.unit(task, lun)

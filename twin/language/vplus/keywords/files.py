@@ -141,9 +141,10 @@ def _write(rt, unit: tuple, items: tuple):
 @instruction("READ", waits=True, targets=True)
 def _read(rt, unit: tuple, kinds: tuple):
     """READ (lun, record) var, ...: one record.  A single variable takes the
-    whole record (a real takes its leading number, as VAL does; a string its
-    first 128 characters); several take its comma- or space-separated fields in order.  A serial READ waits for a
-    whole line; after an error the variables keep their values."""
+    whole record (a real its leading number, as VAL reads it; a string its
+    first 128 characters); several take the record's comma- or space-separated
+    fields in order.  A serial READ waits for a whole line; after an error the
+    variables keep their values."""
     devices = _devices(rt)
     lun, record = _arg(unit, 0), _arg(unit, 1)
     while True:
@@ -170,7 +171,11 @@ def _iostat(rt, lun, select=None):
 
 @function("GETC")
 def _getc(rt, lun, mode=None):
-    return float(_devices(rt).getc(rt.number, to_int(lun), bool(mode and to_int(mode))))
+    """GETC(lun, mode): mode 1 is no-wait; in wait mode the step has already
+    waited for a byte (compile_library.py), so both read the same way here."""
+    if mode is not None:
+        to_int(mode)
+    return float(_devices(rt).getc(rt.number, to_int(lun)))
 
 
 @function("PENDANT")
