@@ -343,6 +343,10 @@ class RecordingRobot:
 
     def __init__(self):
         self.moves: list = []
+        self.stops = 0
+
+    def stop(self):
+        self.stops += 1
 
     def move(self, location, straight):
         self.moves.append(location)
@@ -490,3 +494,17 @@ def test_task_0_attaches_the_robot_at_its_first_motion_in_ev_plus_at_its_start_i
     taker = system.task(1)
     assert task.error is None and taker.finished
     assert (taker.error.code if taker.error else None) == code
+
+
+def test_reacti_stops_the_robot_and_calls_the_routine():
+    """[000] L4497-4500: REACTI also issues a BRAKE to stop the current robot
+    motion at once; the routine is called like REACT's."""
+    robot = RecordingRobot()
+    text = program("""
+REACTI 1001, halted
+WAIT.EVENT , 0.2
+TYPE "main goes on"
+""", name="main") + program('TYPE "reacted"', name="halted")
+    system, task = run_vplus(text, robot=robot, each_cycle=drive_inputs({1001: [(0.05, True)]}))
+    assert task.error is None
+    assert system.console.output == "reacted\nmain goes on\n" and robot.stops == 1
