@@ -31,6 +31,11 @@ def run_ok(body: str, **kw):
     return system
 
 
+def v_plus(system):
+    """setup= for a run under the V+ v17 rules where the guides differ."""
+    system.dialect = "V+"
+
+
 def error_of(body: str, **kw) -> ProgramError:
     _system, task = run_vplus(program(body), **kw)
     assert task.error is not None, "the program should have stopped with an error"
@@ -275,7 +280,8 @@ def test_disk_reads_fixed_records_and_directory_entries(tmp_path):
     system = run_ok('ATTACH (d, 4) "DISK"\nFOPENR (d, 4, 1) "fixed.dat"\nREAD (d, 3) $r3\nREAD (d, 1) $r1\n'
                     'n = IOSTAT(d, 2)\nFCLOSE (d)\nFOPEND (d) "*.*"\nREAD (d) $e1\nREAD (d) $e2\nREAD (d) $e3\n'
                     's3 = IOSTAT(d)\nFCLOSE (d)\nFOPENR (d) "data.txt"\nc1 = GETC(d)\nREAD (d) $rest\n'
-                    'READ (d) $last\nREAD (d) $none\ns = IOSTAT(d)\nDETACH (d)', sandbox=tmp_path)
+                    'READ (d) $last\nREAD (d) $none\ns = IOSTAT(d)\nDETACH (d)', sandbox=tmp_path,
+                    setup=v_plus)
     g = system.globals
     assert (g["$r3"], g["$r1"], g["n"]) == ("cc\0\0", "aaaa", 4.0)
     # [000] "Disk Directory Format": name 8, ".", ext 3, sectors 8, " ", attributes 7, date 9, " ", time 8.
@@ -286,13 +292,16 @@ def test_disk_reads_fixed_records_and_directory_entries(tmp_path):
     assert "$none" not in g  # a READ that fails leaves its variable alone
 
 
-def test_directory_listing_filters_by_pattern(tmp_path):
+def test_directory_listing_filters_by_pattern_in_the_ev_plus_layout(tmp_path):
+    # [001] "Disk Directory Format": attributes, TAB, sectors (10), TAB, date,
+    # TAB, time, TAB, name (eV+, the default dialect).
     for name in ("a.txt", "b.dat", "c.TXT"):
         (tmp_path / name).write_text("x")
     system = run_ok('ATTACH (d, 4) "DISK"\nFOPEND (d) "*.txt"\nREAD (d) $e1\nREAD (d) $e2\nREAD (d) $e3\n'
                     's = IOSTAT(d)\nFCLOSE (d)\nFOPENR (d) "*.txt"\nw = IOSTAT(d)', sandbox=tmp_path)
     g = system.globals
-    assert [g["$e1"][:12], g["$e2"][:12]] == ["A       .TXT", "C       .TXT"]
+    assert [g["$e1"], g["$e2"]] == [" " * 7 + "\t" + "1".rjust(10) + "\t" + " " * 9 + "\t" + " " * 8 + "\t" + n
+                                    for n in ("A.TXT", "C.TXT")]
     assert g["s"] == msg.UNEXPECTED_EOF and "$e3" not in g
     assert g["w"] == msg.INVALID_FILE_SPEC  # wildcards only for directories
 

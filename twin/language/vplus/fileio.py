@@ -194,7 +194,8 @@ class Devices:
             path = _existing_case(path, name)
         return path
 
-    def fopen(self, task: int, lun: int, mode: str, spec: str, record_length: int = 0, flags: int = 0) -> None:
+    def fopen(self, task: int, lun: int, mode: str, spec: str, record_length: int = 0, flags: int = 0,
+              dialect: str = "eV+") -> None:
         unit = self.unit(task, lun)
         if unit.device != "DISK":
             raise IoError(msg.ILLEGAL_IO_COMMAND)
@@ -210,7 +211,8 @@ class Devices:
             if not folder.is_dir():
                 raise IoError(msg.NONEXISTENT_FILE)
             entries = [p for p in sorted(folder.iterdir()) if fnmatch.fnmatch(p.name.lower(), pattern.lower())]
-            handle.data = b"".join(_directory_record(p) + b"\r\n" for p in entries)
+            record = _directory_record_v if dialect == "V+" else _directory_record_ev
+            handle.data = b"".join(record(p) + b"\r\n" for p in entries)
         elif mode == "R":
             if not path.is_file():
                 raise IoError(msg.NONEXISTENT_FILE)
@@ -377,13 +379,28 @@ def _existing_case(folder: Path, name: str) -> Path:
     return folder / name.lower()
 
 
-def _directory_record(path: Path) -> bytes:
-    """One FOPEND record in the V+ layout (V+ guide v17, "Disk Directory Format"):
-    name (8), ".", extension (3), size in 512-byte sectors (8, right-justified),
-    space, attributes (7), date (9) and time (8).  The date and time are blank,
-    as the controller leaves them when its clock was never set."""
+def _directory_fields(path: Path) -> tuple[str, str, int]:
+    """(NAME, EXT, size in 512-byte sectors); attributes are "D" or blank."""
     stem, _, ext = path.name.upper().partition(".")
     sectors = 0 if path.is_dir() else -(-path.stat().st_size // 512)
+    return stem, ext, sectors
+
+
+def _directory_record_v(path: Path) -> bytes:
+    """One FOPEND record in the V+ layout (V+ guide v17, "Disk Directory Format"):
+    name (8), ".", extension (3), size in sectors (8, right-justified), space,
+    attributes (7), date (9), space, time (8).  The date and time are blank, as
+    the controller leaves them when its clock was never set."""
+    stem, ext, sectors = _directory_fields(path)
     attributes = "D" if path.is_dir() else ""
-    text = f"{stem[:8]:<8}.{ext[:3]:<3}{sectors:>8} {attributes:<7}{'':9} {'':8}"
-    return text.encode("latin-1")
+    return f"{stem[:8]:<8}.{ext[:3]:<3}{sectors:>8} {attributes:<7}{'':9} {'':8}".encode("latin-1")
+
+
+def _directory_record_ev(path: Path) -> bytes:
+    """The eV+ layout ([001] "Disk Directory Format"): attributes (7), TAB, size
+    in sectors (10, right-justified), TAB, date (9), TAB, time (8), TAB, then the
+    name and extension; date and time blank as above."""
+    stem, ext, sectors = _directory_fields(path)
+    attributes = "D" if path.is_dir() else ""
+    name = f"{stem}.{ext}" if ext else stem
+    return f"{attributes:<7}\t{sectors:>10}\t{'':9}\t{'':8}\t{name}".encode("latin-1")

@@ -66,7 +66,8 @@ def _opener(mode: str):
         if not items:
             raise fail(msg.INVALID_ARGUMENT, "file specification")
         devices = _devices(rt)
-        devices.run(rt.number, _arg(unit, 0), devices.fopen, mode, _str(items[0]), _arg(unit, 1), _arg(unit, 2))
+        devices.run(rt.number, _arg(unit, 0), devices.fopen, mode, _str(items[0]), _arg(unit, 1), _arg(unit, 2),
+                    rt.system.dialect)
 
     return fopen
 
