@@ -396,3 +396,13 @@ def test_case_takes_a_real():
     """[000] L4775: the CASE target must be a real or an integer."""
     system, task = run_vplus(program('CASE "a" OF\n  VALUE 1:\n    TYPE 1\nEND'))
     assert task.error.code == msg.WRONG_TYPE and task.error.line == 2
+
+
+def test_auto_arrays_keep_their_declared_size_global_arrays_grow():
+    """[000] L3995-3997: AUTO arrays must be declared with a size; global and
+    LOCAL arrays are extended automatically (L4028-4030).  The declared
+    number is the highest index."""
+    text = program("AUTO a[3], $s[1, 2]\na[3] = 1\n$s[1, 2] = \"x\"\ng[100] = 2\nTYPE a[3] + g[100], $s[1, 2]")
+    assert output_of(text) == "3x\n"
+    system, task = run_vplus(program("AUTO a[3]\na[4] = 1"))
+    assert task.error.code == msg.ILLEGAL_ARRAY_INDEX and task.error.line == 3

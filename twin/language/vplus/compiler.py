@@ -454,7 +454,10 @@ class ProgramCompiler(LibraryStatements):
                 continue
             target = ast.Var(var.name, [])
             if self.key(target) in self.scope.auto:
-                self.emit(depth, f"{self.pyname(target)} = _new_array()")
+                if len(dims) > MAX_DIMENSIONS:
+                    raise self.error(s, msg.ILLEGAL_ARRAY_INDEX, f"{len(dims)} dimensions (at most 3)")
+                limits = ", ".join(f"_ix({self.expr(d)})" for d in dims)
+                self.emit(depth, f"{self.pyname(target)} = _auto_array(({limits},))")
             else:
                 table = "L" if s.scope == "LOCAL" else "G"
                 self.emit(depth, f"_array({table}, {self.key(target)!r})")

@@ -139,8 +139,24 @@ def _array(table: dict, key: str) -> VArray:
     return array
 
 
-def _new_array() -> VArray:
-    return VArray()
+class AutoArray(VArray):
+    """An AUTO array: it has the size its declaration gives (the highest index
+    of each dimension) and, unlike GLOBAL and LOCAL arrays, does not grow
+    ([000] L3995-3997, L4028-4030)."""
+
+    def __init__(self, limits: tuple[int, ...]):
+        super().__init__()
+        self.limits = limits
+
+    def __setitem__(self, index, value) -> None:
+        indices = index if isinstance(index, tuple) else (index,)
+        if len(indices) != len(self.limits) or any(i > limit for i, limit in zip(indices, self.limits)):
+            raise fail(msg.ILLEGAL_ARRAY_INDEX, f"{list(indices)} beyond AUTO array size {list(self.limits)}")
+        super().__setitem__(index, value)
+
+
+def _auto_array(limits: tuple[int, ...]) -> AutoArray:
+    return AutoArray(limits)
 
 
 def _defined_element(table: dict, key: str, index) -> float:
