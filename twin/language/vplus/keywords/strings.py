@@ -38,7 +38,7 @@ def typed_number(text: str) -> float:
     return float(match.group(0))
 
 
-def _position(start, text: str) -> int:
+def _position(start) -> int:
     """A 1-based character position as a 0-based index (0 means 1)."""
     return max(to_int(start) - 1, 0) if start is not None else 0
 
@@ -55,7 +55,7 @@ def _len(rt, text):
 
 @function("ASC")
 def _asc(rt, text, index=None):
-    i = _position(index, text)
+    i = _position(index)
     return float(ord(text[i])) if i < len(text) else -1.0
 
 
@@ -69,14 +69,14 @@ def _chr(rt, code):
 
 @function("$MID")
 def _mid(rt, text, start, count=None):
-    begin = _position(start, text)
+    begin = _position(start)
     return text[begin:] if count is None else text[begin : begin + max(to_int(count), 0)]
 
 
 @function("POS")
 def _pos(rt, text, sub, start=None):
     """Position of `sub` in `text` from `start` (1-based), 0 if absent."""
-    found = _str(text).find(_str(sub), _position(start, text))
+    found = _str(text).find(_str(sub), _position(start))
     return float(found + 1)
 
 
@@ -111,7 +111,7 @@ def _truncate(rt, text):
 # next 128, and so on (V+ guide v17 "String-Related Functions": "an array of
 # 128-character string variables").  Short or missing elements read as blanks.
 def _span(first, count) -> tuple[int, int]:
-    begin, size = _position(first, ""), to_int(count)
+    begin, size = _position(first), to_int(count)
     if size < 0 or size > MAX_STRING:
         raise fail(msg.ILLEGAL_VALUE, f"{size} characters")
     return begin, size
@@ -145,7 +145,7 @@ def _pack(rt, value, target, first, count):
 
 # ---- binary conversions: bytes of a string <-> numbers
 def _bytes(text: str, start, size: int) -> bytes:
-    begin = _position(start, text)
+    begin = _position(start)
     chunk = text[begin : begin + size]
     if len(chunk) < size:
         raise fail(msg.ILLEGAL_VALUE, f"{size} bytes needed")
