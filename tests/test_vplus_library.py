@@ -464,3 +464,16 @@ def test_vision_instructions_load_and_stop_when_run():
 def test_attach_mode_4_ignores_the_old_value_of_the_unit_variable(tmp_path):
     system = run_ok('d = 0\nATTACH (d, 4) "DISK"\ns = IOSTAT(d)', sandbox=tmp_path)
     assert (system.globals["d"], system.globals["s"]) == (5.0, 1.0)
+
+
+def test_serial_line_errors_reach_getc_and_read_in_order():
+    # [000] "Serial I/O" error table: -524 overrun, -504 for a BREAK.
+    def faults(system):
+        line = system.devices.serial(1)
+        line.fail(-524)
+        line.fail(msg.UNEXPECTED_EOF)
+        line.feed("ok\n")
+
+    out = output_of(program('ATTACH (s, 4) "SERIAL:1"\nTYPE GETC(s, 1)\nREAD (s) $x\nTYPE IOSTAT(s)\n'
+                            'READ (s) $x\nTYPE IOSTAT(s), " ", $x'), setup=faults)
+    assert out == f"-524\n{msg.UNEXPECTED_EOF}\n1 ok\n"

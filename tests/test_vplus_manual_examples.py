@@ -702,3 +702,15 @@ def test_label_blob_without_graphics_reports_the_attach_error():
     twin's), ATTACH fails, GOTO 100 and the error text is typed; the vision
     instructions are never reached."""
     assert output_of(LABEL_BLOB) == "*Device not ready*\n"
+
+
+def test_serial_io_example_reports_a_line_error():
+    """[000] L8105-8139 with a parity error on the line ([000] "Serial I/O":
+    -522 *Data error on device*): the READ fails, label 100 types code and text."""
+    system, task = run_vplus(SERIAL_IO, max_cycles=5)
+    system.devices.serial(1).fail(msg.DATA_ERROR)
+    scheduler = Scheduler()
+    scheduler.add(task)
+    while scheduler.alive:
+        scheduler.run_cycle()
+    assert system.console.output == f"{msg.DATA_ERROR} *Data error on device*\n"

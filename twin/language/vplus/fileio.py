@@ -61,10 +61,25 @@ class SerialLine:
     # program in WAIT.EVENT wakes up ([000] "display()" serial example).
     listener: Callable[[], None] | None = None
 
+    # Line errors a test or scene injects, each met by the next READ or GETC
+    # ([000] "Serial I/O"): -522 parity or framing, -524 overrun, -504 BREAK.
+    errors: list[int] = field(default_factory=list)
+
     def feed(self, data: bytes | str) -> None:
         self.received += data.encode("latin-1") if isinstance(data, str) else data
+        self._wake()
+
+    def fail(self, code: int) -> None:
+        self.errors.append(code)
+        self._wake()
+
+    def _wake(self) -> None:
         if self.listener is not None:
             self.listener()
+
+    def take_error(self) -> None:
+        if self.errors:
+            raise IoError(self.errors.pop(0))
 
 
 @dataclass
@@ -302,6 +317,7 @@ class Devices:
                 raise IoError(msg.UNEXPECTED_EOF)
             return line
         if unit.serial is not None:
+            unit.serial.take_error()
             buffer = unit.serial.received
             end = buffer.find(b"\n")
             if end < 0:
@@ -337,7 +353,7 @@ class Devices:
         """Before a step with GETC(lun) in wait mode: wait while the unit is a
         serial line with nothing received (any other case GETC answers at once)."""
         unit = self.units.get((rt.number, to_int(lun)))
-        while unit is not None and unit.serial is not None and not unit.serial.received:
+        while unit is not None and unit.serial is not None and not (unit.serial.received or unit.serial.errors):
             yield rt.SLICE
 
     def getc(self, task: int, lun: int) -> int:
@@ -345,6 +361,7 @@ class Devices:
         try:
             unit = self.unit(task, lun)
             if unit.serial is not None:
+                unit.serial.take_error()
                 if not unit.serial.received:
                     # No-wait mode, or a GETC whose step could not wait first.
                     raise IoError(msg.NO_DATA)
