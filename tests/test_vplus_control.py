@@ -369,3 +369,11 @@ def test_lowered_blocks_behave_as_structured_ones(body):
     structured, lowered = program(body), program(with_untaken_gotos(body))
     assert "_pc" not in compiled_source(structured) and "_pc" in compiled_source(lowered)
     assert output_of(lowered) == output_of(structured)
+
+
+def test_goto_into_a_for_body_fails_at_its_end():
+    """A GOTO into a FOR loop skips the FOR step: at its END there is no loop
+    to go on with, a *Control structure error* of that FOR."""
+    system, task = run_vplus(program("GOTO 10\nFOR i = 1 TO 3\n10 TYPE \"in\"\nEND"))
+    assert system.console.output == "in\n"
+    assert task.error.code == msg.CONTROL_STRUCTURE and task.error.line == 3

@@ -176,6 +176,7 @@ class ProgramCompiler(LibraryStatements):
         self.targets: set[int] = set()
         self.marks = 0
         self.block_of: dict[int, int] = {}  # mark id -> basic block index
+        self.for_temps: list[str] = []  # limit and step of the lowered FOR loops
 
     # ----------------------------------------------------------------- output
     def emit(self, depth: int, text: str) -> None:
@@ -646,12 +647,17 @@ class ProgramCompiler(LibraryStatements):
     def lower_For(self, s: ast.For, ops: list[_Op]) -> None:
         top, next_, end = self.mark(), self.mark(), self.mark()
         stop, step = self.fresh("stop"), self.fresh("step")
+        self.for_temps += [stop, step]
         ops.append(_Op("code", s, emit=lambda depth: self.for_start(s, stop, step, depth)))
         ops.append(_Op("mark", s, target=top))
         ops.append(_Op("branch", s, target=end, condition=f"not {self.for_test(s, stop, step)}"))
         self.lower_loop(s, ops, next_, end)
-        ops.append(_Op("code", s, emit=lambda depth: self.assign(
-            s.target, self.real(s.target, f"{self.read(s.target)} + {step}"), depth)))
+
+        def next_pass(depth: int) -> None:
+            self.emit(depth, f"if {step} is None: rt.loop_not_started()")  # a GOTO into the body
+            self.assign(s.target, self.real(s.target, f"{self.read(s.target)} + {step}"), depth)
+
+        ops.append(_Op("code", s, emit=next_pass))
         ops.append(_Op("jump", s, target=top))
         ops.append(_Op("mark", s, target=end))
 
@@ -688,6 +694,8 @@ class ProgramCompiler(LibraryStatements):
                 self.block_of[op.target] = len(blocks) - 1
             else:
                 blocks[-1].append(op)
+        if self.for_temps:
+            self.emit(depth, f"{' = '.join(self.for_temps)} = None")
         self.emit(depth, "_pc = 0")
         self.emit(depth, "while True:")
         self.dispatch(blocks, 0, len(blocks), depth + 1)

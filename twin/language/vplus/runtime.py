@@ -274,6 +274,9 @@ class Task(TaskControl):
     def zero_step(self) -> None:
         raise values.fail(msg.ILLEGAL_VALUE, "FOR loop STEP 0")
 
+    def loop_not_started(self) -> None:
+        raise values.fail(msg.CONTROL_STRUCTURE, "a FOR loop entered by GOTO, not through its FOR step")
+
     def stop(self) -> None:
         raise StopProgram()
 
