@@ -508,3 +508,21 @@ TYPE "main goes on"
     system, task = run_vplus(text, robot=robot, each_cycle=drive_inputs({1001: [(0.05, True)]}))
     assert task.error is None
     assert system.console.output == "reacted\nmain goes on\n" and robot.stops == 1
+
+
+def test_status_shows_each_task_its_program_state_and_step():
+    """STATUS ([000] L1000-1004, the monitor command): which program each task
+    runs, its state and the step it is at."""
+    text = program("""
+EXECUTE 1 sleeper()
+EXECUTE 2 broken()
+WAIT
+WAIT
+PAUSE
+""", name="main") + program("LOCK 3\nWAIT.EVENT , 10", name="sleeper") + program("x = 1 / 0", name="broken")
+    system, task = run_vplus(text, max_cycles=10)
+    assert system.status() == [
+        {"task": 0, "program": "main", "state": "paused", "at": ("main", 7), "priority": 0, "cycles": 1},
+        {"task": 1, "program": "sleeper", "state": "running", "at": ("sleeper", 3), "priority": 3, "cycles": 1},
+        {"task": 2, "program": "broken", "state": "error", "at": None, "priority": 0, "cycles": 1},
+    ]

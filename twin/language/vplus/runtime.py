@@ -162,6 +162,20 @@ class VPlusSystem:
                 return task
         return None
 
+    def status(self) -> list[dict]:
+        """What the monitor's STATUS command shows, per task (the latest run
+        of each task number): program, state, the step it is at, program
+        priority and cycles left."""
+        rows = []
+        for number in sorted({t.number for t in self.tasks}):
+            task = self.task(number)
+            where = task.current_step()
+            state = ("error" if task.error is not None else "idle") if task.finished else (
+                "paused" if task.paused else "running")
+            rows.append({"task": number, "program": task.program, "state": state,
+                         "at": where, "priority": task.program_priority, "cycles": task.cycles})
+        return rows
+
     def proceed(self, number: int = 0) -> None:
         """PROCEED: a paused task goes on after its PAUSE."""
         task = self.task(number)

@@ -92,6 +92,7 @@ class TaskControl:
         self.event = False
         self.scheduler = None  # set by Scheduler.add
         self.run_signal: int | None = None  # RUNSIG
+        self.levels: list[list] = []  # the program and the reactions on top of it (_interruptible)
 
     def _drive(self, args: list) -> Iterator:
         """The task's generator: its cycles, its reactions, its end."""
@@ -122,6 +123,7 @@ class TaskControl:
     def _interruptible(self, main: Iterator) -> Iterator:
         """Run `main`, calling reactions between its steps."""
         stack: list[list] = [[main, None]]  # [generator, the wait it is blocked on]
+        self.levels = stack
         while stack:
             if self.abort_requested:
                 raise HaltProgram()
@@ -339,6 +341,22 @@ class TaskControl:
                 raise values.fail(msg.ROBOT_NOT_ATTACHED, f"task {self.number}")
             self.attach_robot()
         return self.system.robot
+
+    def current_step(self) -> tuple[str, int] | None:
+        """(program, step) of the innermost V+ step this task is at, if running."""
+        if self.finished or not self.levels:
+            return None
+        where = None
+        generator = self.levels[-1][0]
+        while generator is not None:
+            frame = getattr(generator, "gi_frame", None)
+            if frame is not None and frame.f_code.co_filename.startswith("<vplus:"):
+                compiled = self.system.programs[frame.f_code.co_filename[7:-1]]
+                statement = compiled.line_map.get(frame.f_lineno)
+                if statement is not None:
+                    where = (compiled.name, statement.step)
+            generator = getattr(generator, "gi_yieldfrom", None)
+        return where
 
     # ------------------------------------------------------------ TASK()
     def task_info(self, select=None, number=None) -> float:
