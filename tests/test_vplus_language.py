@@ -406,3 +406,17 @@ def test_auto_arrays_keep_their_declared_size_global_arrays_grow():
     assert output_of(text) == "3x\n"
     system, task = run_vplus(program("AUTO a[3]\na[4] = 1"))
     assert task.error.code == msg.ILLEGAL_ARRAY_INDEX and task.error.line == 3
+
+
+@pytest.mark.parametrize("body", ["pi = 3", "AUTO sig", "FOR timer = 1 TO 2\nEND", "PROMPT \"x\", priority",
+                                  "$error = \"x\""])
+def test_a_reserved_word_is_not_a_variable_name(body):
+    """[000] L3778-3800: "pi (reserved word)" is rejected with an error message."""
+    with pytest.raises(ProgramError) as info:
+        run_vplus(program(body))
+    assert info.value.code == msg.SYNTAX_ERROR and info.value.line == 2 and "reserved" in info.value.message
+
+
+def test_a_constant_function_passed_to_a_call_is_a_value():
+    text = program("CALL sub(TRUE, PI)", name="main") + program("a = 1\nb = 2\nTYPE a", name="sub", params="a, b")
+    assert output_of(text) == "1\n"

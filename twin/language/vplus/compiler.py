@@ -199,6 +199,7 @@ class ProgramCompiler(LibraryStatements):
     def compile(self) -> CompiledProgram:
         p = self.program
         for param in p.params:
+            self.check_name(param, ast.Statement(line=p.line, column=1, step=1))
             self.scope.auto.add(self.key(param))
         self.collect_declarations(p.body)
         self.emit(0, "def program(rt, _args):")
@@ -235,6 +236,7 @@ class ProgramCompiler(LibraryStatements):
         for statement in body:
             if isinstance(statement, ast.Declare):
                 for var, _dims in statement.names:
+                    self.check_name(var, statement)
                     key = self.key(var if _dims is None else ast.Var(var.name, []))
                     if statement.scope == "AUTO":
                         self.scope.auto.add(key)
@@ -288,7 +290,19 @@ class ProgramCompiler(LibraryStatements):
             return self.storage(var)  # a whole array, a[]
         return self.storage(var)
 
+    @staticmethod
+    def reserved(var: ast.Var) -> bool:
+        """A function keyword: V+ rejects it as a variable name ("pi (reserved
+        word)", [000] L3778-3800)."""
+        name = var.name.upper()
+        return name in STRING_FUNCTIONS if name.startswith("$") else name in FUNCTIONS or name in _TASK_FUNCTIONS
+
+    def check_name(self, var: ast.Var, statement: ast.Statement | None) -> None:
+        if self.reserved(var):
+            raise self.error(statement or self.current, msg.SYNTAX_ERROR, f"{var.name} is a reserved word")
+
     def assign(self, var: ast.Var, value: str, depth: int) -> None:
+        self.check_name(var, None)
         if var.indices:
             key = self.key(var)
             store = self.storage(var)
@@ -749,7 +763,8 @@ class ProgramCompiler(LibraryStatements):
         results = self.fresh("ret")
         self.emit(depth, f"{results} = yield from rt.call({target}, [{args}])")
         for i, arg in enumerate(s.args):
-            if isinstance(arg, ast.Var) and not arg.parenthesized and (arg.indices is None or arg.indices):
+            if (isinstance(arg, ast.Var) and not arg.parenthesized and (arg.indices is None or arg.indices)
+                    and not self.reserved(arg)):  # TRUE, PI...: a value, not a variable
                 self.emit(depth, f"if {results}[{i}] is not None:")
                 self.assign(arg, f"{results}[{i}]", depth + 1)
 
