@@ -526,3 +526,31 @@ PAUSE
         {"task": 1, "program": "sleeper", "state": "running", "at": ("sleeper", 3), "priority": 3, "cycles": 1},
         {"task": 2, "program": "broken", "state": "error", "at": None, "priority": 0, "cycles": 1},
     ]
+
+
+def test_one_program_in_two_tasks_shares_its_local_but_not_its_auto():
+    """[000] L4063-4128, L1232-1250: a LOCAL is shared by every invocation of
+    its program, in any task; an AUTO belongs to one call."""
+    text = program("""
+EXECUTE 1 counter(1)
+EXECUTE 2 counter(2)
+WAIT (TASK(1, 1) == 0) AND (TASK(1, 2) == 0)
+TYPE "shared ", total
+""", name="main") + program("""
+LOCAL shared
+AUTO mine, i
+IF NOT DEFINED(shared) THEN
+  shared = 0
+END
+mine = 0
+FOR i = 1 TO 5
+  shared = shared + 1
+  mine = mine + 1
+  WAIT
+END
+result[who] = mine
+total = shared
+""", name="counter", params="who")
+    system, task = run_vplus(text)
+    assert task.error is None and system.console.output == "shared 10\n"
+    assert dict(system.globals["result[]"]) == {1: 5.0, 2: 5.0}
