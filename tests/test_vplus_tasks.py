@@ -554,3 +554,19 @@ total = shared
     system, task = run_vplus(text)
     assert task.error is None and system.console.output == "shared 10\n"
     assert dict(system.globals["result[]"]) == {1: 5.0, 2: 5.0}
+
+
+def test_a_task_without_a_priority_table_gets_one_turn_per_cycle():
+    """GPL threads bring no V+ slice table: they run in slice 0 of each cycle."""
+    log: list = []
+
+    class Plain(Busy):
+        def __init__(self, name, log):
+            self.name, self.log, self.finished = name, log, False
+            self.generator = self._run(None)
+
+    scheduler = Scheduler()
+    scheduler.add(Plain("g", log))
+    scheduler.run_cycle()
+    scheduler.run_cycle()
+    assert log == ["g", "g"]

@@ -21,7 +21,9 @@ from __future__ import annotations
 from typing import Any, Iterator, Protocol
 
 SLICES = 16  # time slices per major cycle
-DEFAULT_PRIORITIES = (10,) * SLICES  # a task that brings no table of its own
+# A task that brings no table of its own (a GPL thread: GPL has no slice
+# table) runs in slice 0 only: one turn per major cycle.
+DEFAULT_PRIORITIES = (10,) + (-1,) * (SLICES - 1)
 
 
 class _Token:
