@@ -352,8 +352,11 @@ class _RobotOfAnotherTask:
     DEST, SPEED()) is fine; the first motion attaches it to task 0, and in
     any other task is "*Robot not attached to this program*" ([000] L899-930)."""
 
-    _MOTION = {"move", "dwell", "wait_stopped", "hand", "hand_at_next_motion", "request_configuration",
-               "set_speed"}
+    # What moves the robot or changes its TOOL, BASE or motion settings (the
+    # motion branch's controller adds drive, set_tool...); BRAKE (stop) is
+    # allowed from any task ([000] L4592-4595).
+    _MOTION = {"move", "drive", "dwell", "wait_stopped", "hand", "hand_at_next_motion", "request_configuration",
+               "set_speed", "set_accel", "set_duration", "set_modifier", "set_tool", "set_base"}
 
     def __init__(self, robot, task: Task):
         self._robot = robot
