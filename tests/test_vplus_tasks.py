@@ -348,7 +348,7 @@ class RecordingRobot:
     def stop(self):
         self.stops += 1
 
-    def move(self, location, straight):
+    def move(self, location, straight, **options):
         self.moves.append(location)
         yield lambda: True
 
@@ -570,3 +570,29 @@ def test_a_task_without_a_priority_table_gets_one_turn_per_cycle():
     scheduler.run_cycle()
     scheduler.run_cycle()
     assert log == ["g", "g"]
+
+
+@pytest.mark.parametrize("trap", [False, True])
+def test_an_error_thrown_into_a_waiting_task_belongs_to_its_step(trap):
+    """The simulation throws a cell-detected error (a collision) into a task's
+    generator: it stops the program at the step it waits in, or goes to its
+    REACTE routine, which lets the program go on with the next step."""
+    from twin.errors import ProgramError
+
+    text = program(("REACTE trouble\n" if trap else "") + 'WAIT.EVENT , 1\nTYPE "after"', name="main") + program(
+        'TYPE "trapped ", ERROR()\nRETURNE', name="trouble")
+
+    def each_cycle(system):
+        task = system.task(0)
+        if system.clock() >= 0.1 and not task.finished and task.last_error is None:
+            try:  # as twin.simulation does for a collision
+                task.generator.throw(ProgramError("*Collision detected*", -1020))
+            except StopIteration:
+                pass  # the task ended
+
+    system, task = run_vplus(text, each_cycle=each_cycle)
+    if trap:
+        assert task.error is None and system.console.output == "trapped -1020\nafter\n"
+    else:
+        assert task.error.code == -1020 and (task.error.line, task.error.program) == (2, "main")
+        assert system.console.output == ""

@@ -121,31 +121,44 @@ class TaskControl:
                 self.io.signal(-self.run_signal)
 
     def _interruptible(self, main: Iterator) -> Iterator:
-        """Run `main`, calling reactions between its steps."""
+        """Run `main`, calling reactions between its steps.  An error thrown
+        into the task (a collision the cell saw) goes to the step the program
+        is at, where it is located or trapped like any other."""
         stack: list[list] = [[main, None]]  # [generator, the wait it is blocked on]
         self.levels = stack
+        thrown: Exception | None = None
         while stack:
             if self.abort_requested:
                 raise HaltProgram()
-            reaction = self._due_reaction()
-            if reaction is not None:
-                stack.append([self._react(reaction), None])
-                continue
             top = stack[-1]
-            wait = top[1]
-            if callable(wait) and not wait():
-                yield wait  # a reaction ran while this level waited: wait on
-                continue
+            if thrown is None:
+                reaction = self._due_reaction()
+                if reaction is not None:
+                    stack.append([self._react(reaction), None])
+                    continue
+                if callable(top[1]) and not top[1]():
+                    try:
+                        yield top[1]  # a reaction ran while this level waited: wait on
+                    except Exception as err:
+                        thrown = err
+                    continue
             top[1] = None
             try:
-                wait = next(top[0])
+                if thrown is not None:
+                    err, thrown = thrown, None
+                    wait = top[0].throw(err)
+                else:
+                    wait = next(top[0])
             except StopIteration:
                 stack.pop()
                 continue
             if wait is CHECK:
                 continue
             top[1] = wait
-            yield wait
+            try:
+                yield wait
+            except Exception as err:
+                thrown = err
 
     # ------------------------------------------------------------ reactions
     def begin_cycle(self) -> None:
