@@ -377,3 +377,11 @@ def test_goto_into_a_for_body_fails_at_its_end():
     system, task = run_vplus(program("GOTO 10\nFOR i = 1 TO 3\n10 TYPE \"in\"\nEND"))
     assert system.console.output == "in\n"
     assert task.error.code == msg.CONTROL_STRUCTURE and task.error.line == 3
+
+
+def test_a_step_label_is_at_most_65535():
+    """[000] L805-808: a step label is an integer 0 to 65535."""
+    assert output_of(program("GOTO 65535\nTYPE 1\n65535 TYPE 2")) == "2\n"
+    with pytest.raises(ProgramError) as info:
+        parse(program("65536 TYPE 1"), "bad.pg")
+    assert (info.value.code, info.value.line) == (msg.SYNTAX_ERROR, 2)

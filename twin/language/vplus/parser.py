@@ -20,6 +20,7 @@ from . import messages as msg
 from .structure import nest
 
 NAME_LENGTH = 15  # significant characters of a V+ name, not counting the prefix
+MAX_LABEL = 65535  # step labels are integers 0 to 65535 ([000] L805-808)
 
 
 @lru_cache(maxsize=1)
@@ -134,6 +135,9 @@ class _ToAst(Transformer):
             statement = ast.LabelOnly(**_pos(label))
         if label is not None:
             statement.label = int(str(label).strip())
+            if statement.label > MAX_LABEL:
+                raise ProgramError(f"{msg.message(msg.SYNTAX_ERROR)} step label {statement.label} (0 to {MAX_LABEL})",
+                                   msg.SYNTAX_ERROR, line=label.line, column=label.column)
         return statement
 
     def assignment(self, meta, children):
