@@ -420,3 +420,18 @@ def test_a_reserved_word_is_not_a_variable_name(body):
 def test_a_constant_function_passed_to_a_call_is_a_value():
     text = program("CALL sub(TRUE, PI)", name="main") + program("a = 1\nb = 2\nTYPE a", name="sub", params="a, b")
     assert output_of(text) == "1\n"
+
+
+def test_string_operator_example_of_the_manual():
+    """[000] L4315-4321: concatenation with +; relational operators compare
+    strings (ignoring case while UPPER is on); a string and a real do not mix."""
+    body = '''
+$name = "Adept "
+$incorp = ", Inc."
+$coname = $name + "Technology" + $incorp
+TYPE $coname
+TYPE "abc" < "abd", "b" > "A", "x" <> "X"
+'''
+    assert output_of(program(body)) == "Adept Technology, Inc.\n-1-10\n"
+    system, task = run_vplus(program('$s = "a" + 1'))
+    assert task.error.code == msg.WRONG_TYPE and task.error.line == 2
