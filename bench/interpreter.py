@@ -1,8 +1,10 @@
 """Interpreter throughput: simple V+ statements per wall-clock second.
 
-A compute-only program (a loop of assignments and arithmetic) runs on the
-interpreter alone, without a cell.  Statements counted: the body's
-assignments plus the loop's own step (the FOR ... END line).
+Compute-only programs run on the interpreter alone, without a cell: a FOR
+loop of assignments and arithmetic (structured code), and the same loop
+written with a label and IF ... GOTO (the jump-table form the compiler uses
+for programs with GOTO).  Statements counted: the body's assignments plus the
+loop's own step (the FOR's END line; the counter update and the IF ... GOTO).
 
     .venv/bin/python bench/interpreter.py [iterations]
 """
@@ -18,7 +20,8 @@ from twin.controller.io import DigitalIO
 from twin.controller.scheduler import Scheduler
 from twin.language.vplus.runtime import MAJOR_CYCLE, Console, VPlusSystem
 
-PROGRAM = """
+PROGRAMS = {
+    "FOR loop": ("""
 .PROGRAM bench(n)
     AUTO i, a, b, c
     a = 0
@@ -30,14 +33,28 @@ PROGRAM = """
         a = a MOD 1000
     END
 .END
-"""
-BODY_STATEMENTS = 5  # four assignments and the END of the loop
+""", 5),  # four assignments and the END of the loop
+    "GOTO loop": ("""
+.PROGRAM bench(n)
+    AUTO i, a, b, c
+    a = 0
+    b = 1
+    i = 1
+10  a = a + 1
+    b = b * 1.000001
+    c = a - b / 2
+    a = a MOD 1000
+    i = i + 1
+    IF i <= n GOTO 10
+.END
+""", 6),  # five assignments and the IF ... GOTO
+}
 
 
-def run_once(iterations: int) -> float:
+def run_once(text: str, statements: int, iterations: int) -> float:
     clock = [0.0]
     system = VPlusSystem(None, DigitalIO(), lambda: clock[0], Console(stdin=io.StringIO(), echo=None))
-    system.load_text(PROGRAM, "bench.pg")
+    system.load_text(text, "bench.pg")
     task = system.start("bench", args=[float(iterations)])
     scheduler = Scheduler()
     scheduler.add(task)
@@ -47,14 +64,15 @@ def run_once(iterations: int) -> float:
         clock[0] += MAJOR_CYCLE
     elapsed = time.perf_counter() - start
     assert task.error is None, task.error
-    return iterations * BODY_STATEMENTS / elapsed
+    return iterations * statements / elapsed
 
 
 def main() -> None:
     iterations = int(sys.argv[1]) if len(sys.argv) > 1 else 200_000
-    rates = [run_once(iterations) for _ in range(5)]
-    print(f"V+ interpreter: {statistics.median(rates):,.0f} statements/s "
-          f"(median of 5 runs of {iterations:,} iterations x {BODY_STATEMENTS} statements)")
+    for name, (text, statements) in PROGRAMS.items():
+        rates = [run_once(text, statements, iterations) for _ in range(5)]
+        print(f"V+ interpreter, {name}: {statistics.median(rates):,.0f} statements/s "
+              f"(median of 5 runs of {iterations:,} iterations x {statements} statements)")
 
 
 if __name__ == "__main__":

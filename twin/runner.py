@@ -44,8 +44,20 @@ def _open_recorder(sim: Simulation, rrd_path: str | Path | None):
     return Recorder(sim.cell.model, rrd_path)
 
 
-def _start_vplus(sim: Simulation, program: Path, main: str | None, console: Console | None) -> VPlusSystem:
-    system = VPlusSystem(sim.controller, sim.io, sim.clock, console=console, seed=sim.cell.seed)
+def _sandbox(program: Path, output: str | Path | None) -> Path:
+    """The folder a program's file I/O is confined to (V+ ATTACH "DISK", GPL /flash...):
+    `<program>-files` beside the report or recording, else a temporary folder."""
+    if output is None:
+        return Path(tempfile.mkdtemp(prefix="twin-files-"))
+    sandbox = Path(output).resolve().parent / f"{program.stem}-files"
+    sandbox.mkdir(parents=True, exist_ok=True)
+    return sandbox
+
+
+def _start_vplus(sim: Simulation, program: Path, main: str | None, console: Console | None,
+                 sandbox: Path) -> VPlusSystem:
+    system = VPlusSystem(sim.controller, sim.io, sim.clock, console=console, seed=sim.cell.seed,
+                         sandbox=sandbox)
     for name, location in sim.taught_locations().items():
         system.define_location(name, location)
     names = system.load(program)
@@ -56,15 +68,9 @@ def _start_vplus(sim: Simulation, program: Path, main: str | None, console: Cons
 
 
 def _start_gpl(sim: Simulation, project: Path, main: str | None, console: Console | None,
-               output: str | Path | None) -> GplSystem:
+               sandbox: Path) -> GplSystem:
     """A GPL project folder: Project.gpr names the files and the start procedure
-    (`main` overrides it).  File I/O (/flash, /ROMDISK ...) goes to the folder
-    `<project>-files` beside the report or recording, else to a temporary one."""
-    if output is not None:
-        sandbox = Path(output).resolve().parent / f"{project.name}-files"
-        sandbox.mkdir(parents=True, exist_ok=True)
-    else:
-        sandbox = Path(tempfile.mkdtemp(prefix="twin-gpl-"))
+    (`main` overrides it)."""
     system = GplSystem(sim.controller, sim.io, sim.clock, sim.scheduler, console=console, sandbox=sandbox,
                        seed=sim.cell.seed)
     system.load_project(project)
@@ -93,10 +99,11 @@ def run_program(
 
     sim = Simulation(scene, seed=seed)
     sim.recorder = _open_recorder(sim, rrd_path)
+    sandbox = _sandbox(program, report_path or rrd_path)
     if program.is_dir():
-        system = _start_gpl(sim, program, main, console, rrd_path or report_path)
+        system = _start_gpl(sim, program, main, console, sandbox)
     else:
-        system = _start_vplus(sim, program, main, console)
+        system = _start_vplus(sim, program, main, console, sandbox)
 
     if sim.recorder is not None:
         sim.recorder.log_text(0.0, f"twin run {program} on {scene}")

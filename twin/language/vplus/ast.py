@@ -16,6 +16,7 @@ from typing import Union
 @dataclass
 class Num:
     value: float
+    double: bool = False  # a ^D constant keeps double precision; others are single
 
 
 @dataclass
@@ -158,6 +159,16 @@ class Speed(Statement):
 
 
 @dataclass
+class ExecuteProgram(Statement):
+    """EXECUTE [task] program(args)[, cycles[, step]]."""
+
+    task: Expr | None
+    name: str
+    args: list[Expr | None]
+    options: list[Expr | None]  # cycles, step
+
+
+@dataclass
 class Instruction(Statement):
     """Any other keyword statement: MOVE pick, APPRO pick, 25, OPENI, SIGNAL 1 ..."""
 
@@ -284,3 +295,26 @@ class Module:
     file: str
     programs: list[Program]
     data: list[DataSection]
+    lines: list[str] = field(default_factory=list)  # the source text, for error messages
+
+
+# ---------------------------------------------------- I/O and keyed statements
+# (lang-library: the V+ function and instruction library, issue #3)
+@dataclass
+class IoStatement(Statement):
+    """An instruction on a logical unit: ATTACH (lun, 4) "DISK", READ (lun) $x,
+    WRITE (lun) "text", /S, FOPENR (lun) $name, GTYPE (glun) x, y, $s."""
+
+    name: str  # upper case
+    unit: list[Expr | None]  # what the parentheses hold: lun[, mode, record...]
+    items: list["Expr | Format"]
+
+
+@dataclass
+class KeyedAssign(Statement):
+    """An instruction that assigns what it names: BITS 1, 8 = 255,
+    DECOMPOSE parts[] = loc, SWITCH CP = SIG(1001), TIMER 1 = 0."""
+
+    name: str  # upper case
+    args: list[Expr | None]
+    value: Expr

@@ -21,20 +21,53 @@ expression, `(x)`, `loc:NULL` or `$s+""`, is not written back).
 
 Every generated line is mapped back to the V+ statement it came from
 (`CompiledProgram.line_map`), so errors report file, line and step.
+
+GOTO: Python has no jump, so a program that uses GOTO (or a multi-level
+EXIT/NEXT) is lowered to a jump table: its body is cut into basic blocks at
+the labels GOTO targets and at the joins of the blocks it lowers, and runs as
+`while True:` around a binary dispatch on the block number `_pc`.  Only the
+IF/FOR/WHILE/DO/CASE blocks that hold a GOTO, a GOTO target or a multi-level
+EXIT are lowered to jumps; the others stay structured Python inside their
+basic block, and programs without GOTO keep the structured form entirely.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 from ...errors import ProgramError
 from . import ast
 from . import messages as msg
+from .compile_library import LIBRARY_CALLS, LibraryStatements
 from .keywords import FUNCTIONS, INSTRUCTIONS, STRING_FUNCTIONS
+from .values import single
+from .parser import normalize_name
 
 # A time slice: loops hand the CPU back to the scheduler every this many
 # iterations, as the V+ scheduler preempts a task at the end of its slice.
 SLICE_ITERATIONS = 1024
+MAX_DIMENSIONS = 3  # arrays have one to three dimensions ([000] L3987-4045)
+
+# Program-interrupt and task instructions, carried out by the task itself
+# (tasking.TaskControl): keyword -> (method of rt, whether it may wait,
+# fewest and most arguments).
+_TASK_INSTRUCTIONS = {
+    "LOCK": ("lock", True, 1, 1), "IGNORE": ("ignore", False, 1, 1), "ABORT": ("abort", False, 0, 1),
+    "KILL": ("kill", False, 1, 1), "CYCLE.END": ("cycle_end", False, 0, 1), "PAUSE": ("pause", True, 0, 0),
+    "SET.EVENT": ("set_event", False, 0, 1), "CLEAR.EVENT": ("clear_event", False, 0, 1),
+    "WAIT.EVENT": ("wait_event", True, 0, 2), "RELEASE": ("release", True, 0, 1),
+    "RUNSIG": ("runsig", False, 1, 1),
+}
+# keyword -> (method of rt, fewest and most arguments)
+_TASK_FUNCTIONS = {"PRIORITY": ("priority", 0, 0), "TASK": ("task_info", 0, 2), "GET.EVENT": ("get_event", 0, 1)}
+# Block statements and steps that only steer the flow are not wrapped for the
+# error trap (REACTE): an error trap resumes at the step after a failing one.
+_UNTRAPPED = (ast.If, ast.For, ast.While, ast.DoUntil, ast.Case, ast.Declare, ast.LabelOnly)
+
+_FLOW = {"RETURN", "RETURNE", "EXIT", "NEXT", "STOP", "HALT"}
+# Instructions the compiler carries out itself (besides the keyword table).
+_INSTRUCTION_NAMES = {*_FLOW, *_TASK_INSTRUCTIONS, "WAIT", "REACT", "REACTI", "REACTE"}
 
 _RELATIONAL = {"==": "==", "<>": "!=", "<": "<", "<=": "<=", ">": ">", ">=": ">="}
 _ARITH = {"+": "+", "-": "-", "*": "*", "/": "/"}
@@ -71,6 +104,56 @@ def is_string(expr: ast.Expr) -> bool:
     return False
 
 
+def _bodies(s: ast.Statement) -> list[list[ast.Statement]]:
+    if isinstance(s, ast.If):
+        return [s.body, s.orelse]
+    if isinstance(s, (ast.For, ast.While, ast.DoUntil)):
+        return [s.body]
+    if isinstance(s, ast.Case):
+        return [body for _, body in s.cases] + ([s.default] if s.default is not None else [])
+    return []
+
+
+def _walk(body: list[ast.Statement]):
+    for s in body:
+        yield s
+        for inner in _bodies(s):
+            yield from _walk(inner)
+
+
+def _loop_control(s: ast.Statement) -> tuple[str, int] | None:
+    """("EXIT" | "NEXT", levels) for EXIT [n] and NEXT [n], else None."""
+    if not isinstance(s, ast.Instruction) or s.name not in ("EXIT", "NEXT"):
+        return None
+    if not s.args:
+        return s.name, 1
+    level = s.args[0]
+    if len(s.args) > 1 or not isinstance(level, ast.Num) or level.value < 1 or not float(level.value).is_integer():
+        raise ProgramError(f"{msg.message(msg.INVALID_ARGUMENT)} {s.name} level", msg.INVALID_ARGUMENT,
+                           line=s.line, column=s.column, step=s.step)
+    return s.name, int(level.value)
+
+
+def _forces_jumps(s: ast.Statement, targets: set[int]) -> bool:
+    """A statement that only the jump-table form can run."""
+    control = _loop_control(s)
+    return (isinstance(s, (ast.Goto, ast.IfGoto)) or s.label in targets
+            or (control is not None and control[1] > 1))
+
+
+@dataclass
+class _Op:
+    """One step of a lowered program: a statement compiled as usual, a block
+    boundary, a jump, or a conditional jump on a Python condition."""
+
+    kind: str  # "stmt", "mark", "jump", "branch", "code"
+    statement: ast.Statement | None = None
+    target: int = -1  # mark id
+    condition: str = ""  # for "branch": jump when this Python condition holds
+    emit: object = None  # for "code": callable(depth) that emits lines
+    loops: tuple = ()  # the loop stack a "stmt" is compiled under
+
+
 @dataclass
 class _Scope:
     auto: set[str] = field(default_factory=set)  # names kept as Python locals
@@ -78,7 +161,7 @@ class _Scope:
     doubles: set[str] = field(default_factory=set)
 
 
-class ProgramCompiler:
+class ProgramCompiler(LibraryStatements):
     def __init__(self, program: ast.Program):
         self.program = program
         self.lines: list[str] = []
@@ -87,6 +170,13 @@ class ProgramCompiler:
         self.temp = 0
         self.current: ast.Statement | None = None
         self.count = 0
+        # Enclosing loops for EXIT/NEXT: ("py", tail emitter) for a Python
+        # loop, ("jump", exit mark, next mark) for a lowered one.
+        self.loops: list[tuple] = []
+        self.targets: set[int] = set()
+        self.marks = 0
+        self.block_of: dict[int, int] = {}  # mark id -> basic block index
+        self.for_temps: list[str] = []  # limit and step of the lowered FOR loops
 
     # ----------------------------------------------------------------- output
     def emit(self, depth: int, text: str) -> None:
@@ -109,6 +199,7 @@ class ProgramCompiler:
     def compile(self) -> CompiledProgram:
         p = self.program
         for param in p.params:
+            self.check_name(param, ast.Statement(line=p.line, column=1, step=1))
             self.scope.auto.add(self.key(param))
         self.collect_declarations(p.body)
         self.emit(0, "def program(rt, _args):")
@@ -121,22 +212,38 @@ class ProgramCompiler:
         self.emit(2, f"rt.too_many_arguments({p.name!r}, len(_args))")
         for i, param in enumerate(p.params):
             local = self.pyname(param)
+            # Arguments "must match ... in number of arguments and data type" ([001] L510).
+            kind = "string" if param.name.startswith("$") else "array" if param.indices is not None else "value"
             self.emit(1, f"if len(_args) > {i} and _args[{i}] is not None:")
-            self.emit(2, f"{local} = _args[{i}]")
-        self.block(p.body, 1)
-        self.emit_return(1)
+            self.emit(2, f"{local} = _argument(_args[{i}], {kind!r}, {param.name!r})")
+        self.targets = self.goto_targets(p.body)
+        if any(_forces_jumps(t, self.targets) for t in _walk(p.body)):
+            self.jump_table(p.body, 1)
+        else:
+            self.block(p.body, 1)
+            self.emit_return(1)
         return CompiledProgram(p.name, "\n".join(self.lines) + "\n", self.line_map, p.file, p.params,
                                statement_count=self.count)
 
     def collect_declarations(self, body: list[ast.Statement]) -> None:
+        # Declarations come before any executable step: only comments, blank
+        # lines and other declarations may precede them ([000] L859-864).
+        executable = next((s for s in body if not isinstance(s, (ast.Declare, ast.LabelOnly))), None)
+        for statement in _walk(body):
+            if isinstance(statement, ast.Declare) and executable is not None and statement.line > executable.line:
+                raise self.error(statement, msg.SYNTAX_ERROR,
+                                 f"{statement.scope} after the first executable step (line {executable.line})")
         for statement in body:
             if isinstance(statement, ast.Declare):
                 for var, _dims in statement.names:
+                    self.check_name(var, statement)
                     key = self.key(var if _dims is None else ast.Var(var.name, []))
                     if statement.scope == "AUTO":
                         self.scope.auto.add(key)
                     elif statement.scope == "LOCAL":
                         self.scope.local.add(key)
+                    if statement.double:
+                        self.scope.doubles.add(key)
 
     def emit_return(self, depth: int) -> None:
         if not self.program.params:
@@ -163,10 +270,15 @@ class ProgramCompiler:
         return f"G[{key!r}]"
 
     def index(self, indices: list[ast.Expr]) -> str:
+        if len(indices) > MAX_DIMENSIONS:
+            raise self.error(self.current, msg.ILLEGAL_ARRAY_INDEX, f"{len(indices)} dimensions (at most 3)")
         parts = []
         for e in indices:
-            if isinstance(e, ast.Num) and float(e.value).is_integer():
-                parts.append(str(int(e.value)))
+            if isinstance(e, ast.Num):  # rounded now, as _ix rounds at run time
+                index = math.floor(e.value + 0.5)
+                if index < 0:
+                    raise self.error(self.current, msg.ILLEGAL_ARRAY_INDEX, str(index))
+                parts.append(str(index))
             else:
                 parts.append(f"_ix({self.expr(e)})")
         return parts[0] if len(parts) == 1 else "(" + ", ".join(parts) + ")"
@@ -178,7 +290,19 @@ class ProgramCompiler:
             return self.storage(var)  # a whole array, a[]
         return self.storage(var)
 
+    @staticmethod
+    def reserved(var: ast.Var) -> bool:
+        """A function keyword: V+ rejects it as a variable name ("pi (reserved
+        word)", [000] L3778-3800)."""
+        name = var.name.upper()
+        return name in STRING_FUNCTIONS if name.startswith("$") else name in FUNCTIONS or name in _TASK_FUNCTIONS
+
+    def check_name(self, var: ast.Var, statement: ast.Statement | None) -> None:
+        if self.reserved(var):
+            raise self.error(statement or self.current, msg.SYNTAX_ERROR, f"{var.name} is a reserved word")
+
     def assign(self, var: ast.Var, value: str, depth: int) -> None:
+        self.check_name(var, None)
         if var.indices:
             key = self.key(var)
             store = self.storage(var)
@@ -194,10 +318,18 @@ class ProgramCompiler:
     # ----------------------------------------------------------- expressions
     def expr(self, e: ast.Expr) -> str:
         if isinstance(e, ast.Num):
-            return repr(float(e.value))
+            # A constant is a single-precision real unless written ^D ([000] L3895-3910).
+            if e.double:
+                return repr(float(e.value))
+            try:
+                return repr(single(e.value))
+            except OverflowError:
+                raise self.error(self.current, msg.OVERFLOW, f"{e.value:g} is beyond single precision") from None
         if isinstance(e, ast.Str):
             return repr(e.value)
         if isinstance(e, ast.Var):
+            if e.indices is None and e.name.upper() in _TASK_FUNCTIONS:
+                return self.call(ast.Call(e.name.upper(), []))
             if e.indices is None and e.name.upper() in FUNCTIONS and not e.name.startswith("#"):
                 return self.call(ast.Call(e.name.upper(), []))
             if e.indices is None and e.name.upper() in STRING_FUNCTIONS:
@@ -261,6 +393,12 @@ class ProgramCompiler:
     def call(self, e: ast.Call) -> str:
         if e.name == "DEFINED":
             return self.defined(e)
+        if e.name in _TASK_FUNCTIONS:
+            method, fewest, most = _TASK_FUNCTIONS[e.name]
+            self.argument_count(e.name, e.args, fewest, most)
+            return f"rt.{method}({self.arguments(e.args)})"
+        if e.name in LIBRARY_CALLS:
+            return self.library_call(e)  # $DECODE, TAS, PARAMETER(name): see compile_library.py
         table = STRING_FUNCTIONS if e.name.startswith("$") else FUNCTIONS
         if e.name not in table:
             raise ProgramError(f"{msg.message(msg.UNDEFINED_PROGRAM)} {e.name}", msg.UNDEFINED_PROGRAM)
@@ -292,7 +430,17 @@ class ProgramCompiler:
         handler = getattr(self, "s_" + type(s).__name__, None)
         if handler is None:
             raise self.error(s, msg.UNKNOWN_KEYWORD, type(s).__name__)
-        handler(s, depth)
+        if isinstance(s, _UNTRAPPED) or (isinstance(s, ast.Instruction) and s.name in _FLOW):
+            handler(s, depth)
+            return
+        # A step's error goes to the task's REACTE routine, if it has one; the
+        # try costs nothing until something raises (Python 3.11).
+        self.emit(depth, "try:")
+        self.wait_for_input(s, depth + 1)  # GETC in wait mode: see compile_library.py
+        handler(s, depth + 1)
+        self.current = s
+        self.emit(depth, "except _TRAPPED as _error:")
+        self.emit(depth + 1, "yield from rt.trap(_error)")
 
     def s_Assign(self, s: ast.Assign, depth: int) -> None:
         if s.target.name.startswith("$") != is_string(s.value) and not isinstance(s.value, ast.Call):
@@ -300,9 +448,17 @@ class ProgramCompiler:
         value = self.expr(s.value)
         if s.target.name.startswith("$"):
             value = f"_str({value})"
-        elif not isinstance(s.value, ast.Num):
-            value = f"_real({value})"
+        elif isinstance(s.value, ast.Num) and (not s.value.double or self.key(s.target) in self.scope.doubles):
+            pass  # a constant is stored as it was compiled
+        else:
+            value = self.real(s.target, value)
         self.assign(s.target, value, depth)
+
+    def real(self, target: ast.Var, value: str) -> str:
+        """The Python expression that stores `value` into a real variable:
+        DOUBLE variables keep 64 bits, the others are single precision."""
+        key = self.key(target)
+        return f"_real({value})" if key in self.scope.doubles else f"_single({value})"
 
     def s_SetLocation(self, s: ast.SetLocation, depth: int) -> None:
         self.assign(s.target, f"_location({self.expr(s.value)})", depth)
@@ -313,7 +469,10 @@ class ProgramCompiler:
                 continue
             target = ast.Var(var.name, [])
             if self.key(target) in self.scope.auto:
-                self.emit(depth, f"{self.pyname(target)} = _new_array()")
+                if len(dims) > MAX_DIMENSIONS:
+                    raise self.error(s, msg.ILLEGAL_ARRAY_INDEX, f"{len(dims)} dimensions (at most 3)")
+                limits = ", ".join(f"_ix({self.expr(d)})" for d in dims)
+                self.emit(depth, f"{self.pyname(target)} = _auto_array(({limits},))")
             else:
                 table = "L" if s.scope == "LOCAL" else "G"
                 self.emit(depth, f"_array({table}, {self.key(target)!r})")
@@ -338,35 +497,73 @@ class ProgramCompiler:
         self.emit(depth + 1, "_slice = 0")
         self.emit(depth + 1, "yield rt.SLICE")
 
-    def s_For(self, s: ast.For, depth: int) -> None:
-        stop, step = self.fresh("stop"), self.fresh("step")
+    def for_start(self, s: ast.For, stop: str, step: str, depth: int) -> None:
+        """FOR evaluates its limit and step once, before the first pass."""
         self.emit(depth, f"{stop} = _real({self.expr(s.stop)})")
         self.emit(depth, f"{step} = {self.expr(s.step_by) if s.step_by else '1.0'}")
         self.emit(depth, f"if {step} == 0: rt.zero_step()")
-        self.assign(s.target, f"_real({self.expr(s.start)})", depth)
+        self.assign(s.target, self.real(s.target, self.expr(s.start)), depth)
+
+    def for_test(self, s: ast.For, stop: str, step: str) -> str:
         current = self.read(s.target)
-        self.emit(depth, f"while ({current} <= {stop}) if {step} > 0 else ({current} >= {stop}):")
-        self.block(s.body, depth + 1)
-        self.current = s
-        self.assign(s.target, f"{self.read(s.target)} + {step}", depth + 1)
-        self.slice_check(depth + 1)
+        return f"(({current} <= {stop}) if {step} > 0 else ({current} >= {stop}))"
+
+    def loop_body(self, body: list[ast.Statement], tail, depth: int) -> None:
+        """A Python loop's body, then its tail (what NEXT runs before `continue`)."""
+        self.loops.append(("py", tail))
+        self.block(body, depth)
+        self.loops.pop()
+        tail(depth)
+
+    def s_For(self, s: ast.For, depth: int) -> None:
+        stop, step = self.fresh("stop"), self.fresh("step")
+        self.for_start(s, stop, step, depth)
+        self.emit(depth, f"while {self.for_test(s, stop, step)}:")
+
+        def tail(d: int) -> None:
+            self.current = s
+            self.assign(s.target, self.real(s.target, f"{self.read(s.target)} + {step}"), d)
+            self.slice_check(d)
+
+        self.loop_body(s.body, tail, depth + 1)
 
     def s_While(self, s: ast.While, depth: int) -> None:
         self.emit(depth, f"while {self.condition(s.condition)}:")
-        self.block(s.body, depth + 1)
-        self.current = s
-        self.slice_check(depth + 1)
+
+        def tail(d: int) -> None:
+            self.current = s
+            self.slice_check(d)
+
+        self.loop_body(s.body, tail, depth + 1)
 
     def s_DoUntil(self, s: ast.DoUntil, depth: int) -> None:
         self.emit(depth, "while True:")
-        self.block(s.body, depth + 1)
-        self.current = s
-        self.emit(depth + 1, f"if {self.condition(s.condition)}: break")
-        self.slice_check(depth + 1)
+
+        def tail(d: int) -> None:
+            self.current = s
+            self.emit(d, f"if {self.condition(s.condition)}: break")
+            self.slice_check(d)
+
+        self.loop_body(s.body, tail, depth + 1)
+
+    def loop_control(self, s: ast.Instruction, depth: int) -> None:
+        """EXIT leaves the innermost loop, NEXT starts its next pass ([000] L5043, L5106)."""
+        name, level = _loop_control(s)
+        if not self.loops:
+            raise self.error(s, msg.CONTROL_STRUCTURE, f"{name} outside a loop")
+        loop = self.loops[-1]  # a multi-level EXIT/NEXT always goes to the jump table
+        if loop[0] == "jump":
+            self.emit(depth, f"_pc = {self.block_of[loop[1] if name == 'EXIT' else loop[2]]}")
+            self.emit(depth, "continue")
+        elif name == "EXIT":
+            self.emit(depth, "break")
+        else:
+            loop[1](depth)
+            self.emit(depth, "continue")
 
     def s_Case(self, s: ast.Case, depth: int) -> None:
         subject = self.fresh("case")
-        self.emit(depth, f"{subject} = {self.expr(s.subject)}")
+        self.emit(depth, f"{subject} = _real({self.expr(s.subject)})")  # CASE takes a real ([000] L4775)
         keyword = "if"
         for values, body in s.cases:
             tests = " or ".join(f"{subject} == {self.expr(v)}" for v in values)
@@ -378,11 +575,184 @@ class ProgramCompiler:
             self.emit(depth, "else:" if s.cases else "if True:")
             self.block(s.default, depth + 1)
 
-    def s_Goto(self, s: ast.Goto, depth: int) -> None:
-        # Labels and GOTO need the jump-table form of the compiler (issue #3).
-        raise self.error(s, msg.UNKNOWN_KEYWORD, "GOTO is not supported yet")
+    # ------------------------------------------------------------ GOTO
+    def goto_targets(self, body: list[ast.Statement]) -> set[int]:
+        """The labels some GOTO names; a missing or doubled label is a load error."""
+        labels: dict[int, ast.Statement] = {}
+        for t in _walk(body):
+            if t.label is not None:
+                if t.label in labels:
+                    raise self.error(t, msg.CONTROL_STRUCTURE, f"label {t.label} used twice")
+                labels[t.label] = t
+        targets = set()
+        for t in _walk(body):
+            if isinstance(t, (ast.Goto, ast.IfGoto)):
+                if t.target not in labels:
+                    raise self.error(t, msg.UNDEFINED_LABEL, str(t.target))
+                targets.add(t.target)
+        return targets
 
-    s_IfGoto = s_Goto
+    def needs_jumps(self, s: ast.Statement) -> bool:
+        """Does a block statement hold something only jumps can express?"""
+        return any(_forces_jumps(t, self.targets) for body in _bodies(s) for t in _walk(body))
+
+    def mark(self) -> int:
+        self.marks += 1
+        return self.marks
+
+    def lower(self, body: list[ast.Statement], ops: list[_Op]) -> None:
+        """Append the ops of `body`: statements, marks and jumps."""
+        for s in body:
+            if s.label in self.targets:
+                ops.append(_Op("mark", s, target=self.label_mark(s.label)))
+            if isinstance(s, ast.Goto):
+                ops.append(_Op("jump", s, target=self.label_mark(s.target)))
+            elif isinstance(s, ast.IfGoto):
+                ops.append(_Op("branch", s, target=self.label_mark(s.target), condition=self.condition(s.condition)))
+            elif _loop_control(s) is not None:
+                ops.append(self.loop_jump(s))
+            elif self.needs_jumps(s):
+                getattr(self, "lower_" + type(s).__name__)(s, ops)
+            elif not isinstance(s, ast.LabelOnly):
+                ops.append(_Op("stmt", s, loops=tuple(self.loops)))
+
+    def label_mark(self, label: int) -> int:
+        return -label - 1  # label marks are negative, generated marks positive
+
+    def loop_jump(self, s: ast.Instruction) -> _Op:
+        name, level = _loop_control(s)
+        if level > len(self.loops):
+            raise self.error(s, msg.CONTROL_STRUCTURE, f"{name} outside a loop")
+        loop = self.loops[-level]
+        if loop[0] != "jump":  # only a multi-level EXIT reaches here; it lowers every loop it crosses
+            raise self.error(s, msg.CONTROL_STRUCTURE, f"{name} {level}")
+        return _Op("jump", s, target=loop[1] if name == "EXIT" else loop[2])
+
+    def lower_If(self, s: ast.If, ops: list[_Op]) -> None:
+        orelse, end = self.mark(), self.mark()
+        ops.append(_Op("branch", s, target=orelse, condition=f"not {self.condition(s.condition)}"))
+        self.lower(s.body, ops)
+        ops.append(_Op("jump", s, target=end))
+        ops.append(_Op("mark", s, target=orelse))
+        self.lower(s.orelse, ops)
+        ops.append(_Op("mark", s, target=end))
+
+    def lower_loop(self, s: ast.Statement, ops: list[_Op], next_: int, end: int) -> None:
+        self.loops.append(("jump", end, next_))
+        self.lower(s.body, ops)
+        self.loops.pop()
+        ops.append(_Op("mark", s, target=next_))
+
+    def lower_While(self, s: ast.While, ops: list[_Op]) -> None:
+        top, next_, end = self.mark(), self.mark(), self.mark()
+        ops.append(_Op("mark", s, target=top))
+        ops.append(_Op("branch", s, target=end, condition=f"not {self.condition(s.condition)}"))
+        self.lower_loop(s, ops, next_, end)
+        ops.append(_Op("jump", s, target=top))
+        ops.append(_Op("mark", s, target=end))
+
+    def lower_DoUntil(self, s: ast.DoUntil, ops: list[_Op]) -> None:
+        top, test, end = self.mark(), self.mark(), self.mark()
+        ops.append(_Op("mark", s, target=top))
+        self.lower_loop(s, ops, test, end)
+        ops.append(_Op("branch", s, target=top, condition=f"not {self.condition(s.condition)}"))
+        ops.append(_Op("mark", s, target=end))
+
+    def lower_For(self, s: ast.For, ops: list[_Op]) -> None:
+        top, next_, end = self.mark(), self.mark(), self.mark()
+        stop, step = self.fresh("stop"), self.fresh("step")
+        self.for_temps += [stop, step]
+        ops.append(_Op("code", s, emit=lambda depth: self.for_start(s, stop, step, depth)))
+        ops.append(_Op("mark", s, target=top))
+        ops.append(_Op("branch", s, target=end, condition=f"not {self.for_test(s, stop, step)}"))
+        self.lower_loop(s, ops, next_, end)
+
+        def next_pass(depth: int) -> None:
+            self.emit(depth, f"if {step} is None: rt.loop_not_started()")  # a GOTO into the body
+            self.assign(s.target, self.real(s.target, f"{self.read(s.target)} + {step}"), depth)
+
+        ops.append(_Op("code", s, emit=next_pass))
+        ops.append(_Op("jump", s, target=top))
+        ops.append(_Op("mark", s, target=end))
+
+    def lower_Case(self, s: ast.Case, ops: list[_Op]) -> None:
+        subject, end = self.fresh("case"), self.mark()
+        ops.append(_Op("code", s, emit=lambda depth: self.emit(depth, f"{subject} = _real({self.expr(s.subject)})")))
+        entries = []
+        for values, body in s.cases:
+            entry = self.mark()
+            tests = " or ".join(f"{subject} == {self.expr(v)}" for v in values)
+            ops.append(_Op("branch", s, target=entry, condition=f"({tests})"))
+            entries.append((entry, body))
+        if s.default is not None:
+            entry = self.mark()
+            ops.append(_Op("jump", s, target=entry))
+            entries.append((entry, s.default))
+        else:
+            ops.append(_Op("jump", s, target=end))
+        for entry, body in entries:
+            ops.append(_Op("mark", s, target=entry))
+            self.lower(body, ops)
+            ops.append(_Op("jump", s, target=end))
+        ops.append(_Op("mark", s, target=end))
+
+    def jump_table(self, body: list[ast.Statement], depth: int) -> None:
+        """Compile `body` as basic blocks run by a dispatch loop on `_pc`."""
+        ops: list[_Op] = []
+        self.lower(body, ops)
+        blocks: list[list[_Op]] = [[]]
+        for op in ops:
+            if op.kind == "mark":
+                if blocks[-1]:
+                    blocks.append([])
+                self.block_of[op.target] = len(blocks) - 1
+            else:
+                blocks[-1].append(op)
+        if self.for_temps:
+            self.emit(depth, f"{' = '.join(self.for_temps)} = None")
+        self.emit(depth, "_pc = 0")
+        self.emit(depth, "while True:")
+        self.dispatch(blocks, 0, len(blocks), depth + 1)
+
+    def dispatch(self, blocks: list[list[_Op]], low: int, high: int, depth: int) -> None:
+        """A binary search on `_pc`: a jump costs log2(blocks) comparisons."""
+        if high - low == 1:
+            self.basic_block(blocks, low, depth)
+            return
+        middle = (low + high) // 2
+        self.emit(depth, f"if _pc < {middle}:")
+        self.dispatch(blocks, low, middle, depth + 1)
+        self.emit(depth, "else:")
+        self.dispatch(blocks, middle, high, depth + 1)
+
+    def basic_block(self, blocks: list[list[_Op]], index: int, depth: int) -> None:
+        ops = blocks[index]
+        for op in ops:
+            self.current = op.statement
+            if op.kind == "stmt":
+                saved, self.loops = self.loops, list(op.loops)
+                self.statement(op.statement, depth)
+                self.loops = saved
+            elif op.kind == "code":
+                op.emit(depth)
+            elif op.kind == "jump":
+                self.jump(index, op.target, depth)
+                return
+            else:
+                self.emit(depth, f"if {op.condition}:")
+                self.jump(index, op.target, depth + 1)
+        if index + 1 < len(blocks):
+            self.emit(depth, f"_pc = {index + 1}")
+        else:
+            self.emit_return(depth)
+
+    def jump(self, here: int, mark: int, depth: int) -> None:
+        target = self.block_of[mark]
+        self.emit(depth, f"_pc = {target}")
+        if target <= here:  # a backward jump closes a loop: time-slice it
+            self.slice_check(depth)
+        self.emit(depth, "continue")
+
 
     def s_CallProgram(self, s: ast.CallProgram, depth: int) -> None:
         args = ", ".join("None" if a is None else self.expr(a) for a in s.args)
@@ -393,7 +763,8 @@ class ProgramCompiler:
         results = self.fresh("ret")
         self.emit(depth, f"{results} = yield from rt.call({target}, [{args}])")
         for i, arg in enumerate(s.args):
-            if isinstance(arg, ast.Var) and not arg.parenthesized and (arg.indices is None or arg.indices):
+            if (isinstance(arg, ast.Var) and not arg.parenthesized and (arg.indices is None or arg.indices)
+                    and not self.reserved(arg)):  # TRUE, PI...: a value, not a variable
                 self.emit(depth, f"if {results}[{i}] is not None:")
                 self.assign(arg, f"{results}[{i}]", depth + 1)
 
@@ -412,7 +783,7 @@ class ProgramCompiler:
         if s.target.name.startswith("$"):
             self.assign(s.target, text, depth)
         else:
-            self.assign(s.target, f"rt.prompt_number({text})", depth)
+            self.assign(s.target, self.real(s.target, f"rt.prompt_number({text})"), depth)
 
     def s_Parameter(self, s: ast.Parameter, depth: int) -> None:
         index = self.expr(s.index) if s.index is not None else "None"
@@ -422,15 +793,38 @@ class ProgramCompiler:
         rotation = self.expr(s.rotation) if s.rotation is not None else "None"
         self.emit(depth, f"rt.set_speed({self.expr(s.value)}, {rotation}, {tuple(s.modifiers)!r})")
 
+    def argument_count(self, name: str, args: list, fewest: int, most: int) -> None:
+        if not fewest <= len(args) <= most or any(a is None for a in args[:fewest]):
+            raise self.error(self.current, msg.INVALID_ARGUMENT,
+                             f"{name} takes {fewest}{'' if most == fewest else f' to {most}'} argument(s)")
+
+    def arguments(self, args: list) -> str:
+        return ", ".join("None" if a is None else self.expr(a) for a in args)
+
     def s_Instruction(self, s: ast.Instruction, depth: int) -> None:
-        name = s.name
-        if name == "RETURN":
+        name = s.name = self.keyword(s)
+        if name in ("RETURN", "RETURNE"):  # RETURNE: an error trap goes on after the failed step
             self.emit_return(depth)
             return
-        if name == "WAIT" and s.args:
-            # WAIT expr re-evaluates the condition each scheduling cycle.
+        if name in ("EXIT", "NEXT"):
+            self.loop_control(s, depth)
+            return
+        if name == "WAIT":
+            if not s.args:  # sleep until the next major cycle ([000] L1435-1437)
+                self.emit(depth, "yield rt.NEXT_CYCLE")
+                return
+            # WAIT expr: "a release to anyone if the expression is FALSE" ([000] L1437-1438).
             self.emit(depth, f"while not {self.condition(s.args[0])}:")
-            self.emit(depth + 1, "yield rt.SLICE")
+            self.emit(depth + 1, "yield rt.RELEASE")
+            return
+        if name in ("REACT", "REACTI", "REACTE"):
+            self.reaction(s, depth)
+            return
+        if name in _TASK_INSTRUCTIONS:
+            method, waits, fewest, most = _TASK_INSTRUCTIONS[name]
+            self.argument_count(name, s.args, fewest, most)
+            call = f"rt.{method}({self.arguments(s.args)})"
+            self.emit(depth, f"yield from {call}" if waits else call)
             return
         spec = INSTRUCTIONS.get(name)
         if spec is None:
@@ -441,6 +835,52 @@ class ProgramCompiler:
             args = ", ".join("None" if a is None else self.expr(a) for a in s.args)
         call = f"I[{name!r}](rt{', ' if args else ''}{args})"
         self.emit(depth, f"yield from {call}" if spec.waits else call)
+
+
+    def keyword(self, s: ast.Instruction) -> str:
+        """An instruction's full name.  Like the V+ editor, which expands
+        abbreviations when it closes a line ([000] L2583, L2593), a unique
+        beginning of an instruction keyword (at least two letters) stands
+        for it: SIGN 1 is SIGNAL 1."""
+        if s.name in _INSTRUCTION_NAMES or s.name in INSTRUCTIONS or len(s.name) < 2:
+            return s.name
+        matches = sorted({n for n in [*_INSTRUCTION_NAMES, *INSTRUCTIONS] if n.startswith(s.name)})
+        if len(matches) == 1:
+            return matches[0]
+        detail = f"{s.name} (could be {', '.join(matches)})" if matches else s.name
+        raise self.error(s, msg.UNKNOWN_KEYWORD, detail)
+
+    def reaction(self, s: ast.Instruction, depth: int) -> None:
+        """REACT[I] signal, program(args)[, priority] and REACTE program: the
+        program is named, not evaluated; its arguments are passed by value."""
+        position = 0 if s.name == "REACTE" else 1
+        if len(s.args) <= position or s.args[position] is None:
+            if s.name == "REACTE":  # REACTE alone: no error trap any more
+                self.emit(depth, "rt.react_error(None)")
+                return
+            raise self.error(s, msg.INVALID_ARGUMENT, f"{s.name} needs a program")
+        target = s.args[position]
+        if isinstance(target, ast.Var) and target.indices is None:
+            name, args = target.name, []
+        elif isinstance(target, ast.Call):
+            name, args = normalize_name(target.name), target.args
+        else:
+            raise self.error(s, msg.INVALID_ARGUMENT, f"{s.name} needs a program name")
+        if s.name == "REACTE":
+            self.emit(depth, f"rt.react_error({name!r})")
+            return
+        rest = s.args[2:]
+        priority = "None" if not rest or rest[0] is None else self.expr(rest[0])
+        signal = self.expr(s.args[0]) if s.args[0] is not None else "None"
+        self.emit(depth, f"rt.react({signal}, {name!r}, [{self.arguments(args)}], {priority}, "
+                         f"immediate={s.name == 'REACTI'})")
+
+    def s_ExecuteProgram(self, s: ast.ExecuteProgram, depth: int) -> None:
+        """EXECUTE [task] program(args)[, cycles[, step]]: arguments by value."""
+        task = "None" if s.task is None else self.expr(s.task)
+        options = self.arguments(s.options)
+        self.emit(depth, f"rt.execute({task}, {s.name!r}, [{self.arguments(s.args)}]"
+                         f"{', ' if options else ''}{options})")
 
 
 def compile_program(program: ast.Program) -> CompiledProgram:

@@ -17,7 +17,7 @@ from ...errors import ProgramError
 from . import ast
 from . import messages as msg
 from .parser import normalize_name, parse_number
-from .values import VArray
+from .values import VArray, single
 
 _ENTRY = re.compile(r"^([$#]?[A-Za-z][A-Za-z0-9._]*)(?:\[([0-9, ]+)\])?\s*=?\s*(.*)$")
 
@@ -51,6 +51,8 @@ def load_data_section(section: ast.DataSection, table: dict) -> None:
                     value = tuple(numbers) if name.startswith("#") else Location(*numbers)
                 else:
                     (value,) = numbers
+                    if section.kind == "REALS":
+                        value = single(value)  # .DOUBLES keep 64 bits
         except (ValueError, TypeError):
             raise ProgramError(
                 f"{msg.message(msg.SYNTAX_ERROR)} bad {section.kind.lower()} entry", msg.SYNTAX_ERROR,

@@ -14,6 +14,7 @@ the precision of a V+ single-precision real.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from ...controller.location import Location
@@ -52,12 +53,17 @@ def _fit(text: str, width: int | None) -> str:
     return text.rjust(width)
 
 
+def _integer(value: float) -> int:
+    """Reals become integers by rounding half up, as wherever V+ needs one."""
+    return math.floor(value + 0.5)
+
+
 def format_number(value: float, fmt: Fmt | None) -> str:
     if fmt is None or fmt.code == "D":
         return default_number(value)
     code, width = fmt.code, fmt.width
     if code == "I":
-        return _fit(str(int(round(value))), width)
+        return _fit(str(_integer(value)), width)
     if code == "F":
         return _fit(f"{value:.{fmt.decimals or 0}f}", width)
     if code == "E":
@@ -65,9 +71,9 @@ def format_number(value: float, fmt: Fmt | None) -> str:
     if code == "G":
         return _fit(f"{value:.{fmt.decimals or 7}G}", width)
     if code == "H":
-        return _fit(f"{int(round(value)) & 0xFFFFFFFF:X}", width)
+        return _fit(f"{_integer(value) & 0xFFFFFFFF:X}", width)
     if code == "O":
-        return _fit(f"{int(round(value)) & 0xFFFFFFFF:o}", width)
+        return _fit(f"{_integer(value) & 0xFFFFFFFF:o}", width)
     return default_number(value)
 
 

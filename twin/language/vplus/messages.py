@@ -32,9 +32,28 @@ UNDEFINED_LABEL = -453  # (LRG)
 UNKNOWN_KEYWORD = -454  # (LRG)
 LOCATION_OUT_OF_RANGE = -610  # (LRG)
 ROBOT_NOT_ATTACHED = -601  # (LRG)
+ROBOT_ATTACHED = -602  # twin-chosen: ATTACH of a robot another task holds
+TASK_RUNNING = -420  # twin-chosen: EXECUTE or KILL of a task that is executing
+OVERFLOW = -416  # twin-chosen: a value beyond the range of a single-precision real
 COLLISION = -1020  # twin-defined: the real controller does not see the cell
 JOINT_LIMIT = -1021  # twin-defined code; text as the controller prints it, "*Joint N limit stop*"
 STRAIGHT_LINE_CONFIG = -1022  # twin-defined code for the controller's configuration-change refusal
+# I/O errors the guides name without a code (V+ guide v17, "Disk I/O", "Serial I/O").
+# The search tool found only the LRG's index page (errors -300..-1300), not its
+# numerical list, so these codes are twin's choice inside the LRG's -5xx I/O
+# block, clear of the printed -504/-522/-524/-526 (docs/vplus.md).
+NONEXISTENT_FILE = -500  # twin-chosen
+ILLEGAL_IO_COMMAND = -502  # twin-chosen
+DEVICE_NOT_READY = -506  # twin-chosen; text printed in [000] L7404-7406
+FILE_EXISTS = -512  # twin-chosen
+FILE_ALREADY_OPEN = -513  # twin-chosen
+FILE_NOT_OPEN = -514  # twin-chosen
+NOT_ATTACHED = -516  # twin-chosen
+ALREADY_ATTACHED = -517  # twin-chosen
+INVALID_FILE_SPEC = -518  # twin-chosen
+# A number typed at a PROMPT (texts printed in [000] L10362-10368 for pendant input).
+INVALID_NUMBER = -455  # twin-chosen
+UNEXPECTED_TEXT = -456  # twin-chosen
 
 MESSAGES: dict[int, str] = {
     UNEXPECTED_EOF: "*Unexpected end of file*",
@@ -66,9 +85,23 @@ MESSAGES: dict[int, str] = {
     UNKNOWN_KEYWORD: "*Unknown instruction*",
     LOCATION_OUT_OF_RANGE: "*Location out of range*",
     ROBOT_NOT_ATTACHED: "*Robot not attached to this program*",
+    ROBOT_ATTACHED: "*Robot already attached to a program*",
+    TASK_RUNNING: "*Program already executing*",
+    OVERFLOW: "*Arithmetic overflow*",
     COLLISION: "*Collision detected*",
     JOINT_LIMIT: "*Joint limit stop*",
     STRAIGHT_LINE_CONFIG: "*Straight-line motion can't alter configuration*",
+    NONEXISTENT_FILE: "*Nonexistent file*",
+    ILLEGAL_IO_COMMAND: "*Illegal I/O device command*",
+    DEVICE_NOT_READY: "*Device not ready*",
+    FILE_EXISTS: "*File already exists*",
+    FILE_ALREADY_OPEN: "*File already open*",
+    FILE_NOT_OPEN: "*File not opened*",
+    NOT_ATTACHED: "*Not attached to logical unit*",
+    ALREADY_ATTACHED: "*Logical unit already attached*",
+    INVALID_FILE_SPEC: "*Invalid file specification*",
+    INVALID_NUMBER: "*Invalid number format*",
+    UNEXPECTED_TEXT: "*Unexpected text at end of line*",
 }
 
 

@@ -20,6 +20,7 @@ from . import messages as msg
 from .structure import nest
 
 NAME_LENGTH = 15  # significant characters of a V+ name, not counting the prefix
+MAX_LABEL = 65535  # step labels are integers 0 to 65535 ([000] L805-808)
 
 
 @lru_cache(maxsize=1)
@@ -35,8 +36,12 @@ def normalize_name(text: str) -> str:
     return prefix + text[len(prefix) :][:NAME_LENGTH]
 
 
+BINARY_DIGITS = 8  # "^B ... binary (maximum of 8 bits)", [000] L3903-3905
+
+
 def parse_number(text: str) -> float:
-    """Decimal, ^H hex, ^B binary, ^D double and plain ^ octal constants."""
+    """Decimal, ^H hex, ^B binary, ^D double and plain ^ octal constants;
+    ValueError for digits the radix does not have."""
     if not text.startswith("^"):
         return float(text)
     body = text[1:]
@@ -44,6 +49,8 @@ def parse_number(text: str) -> float:
     if radix is None:
         return float(int(body, 8))
     body = body[1:]
+    if radix == 2 and len(body) > BINARY_DIGITS:
+        raise ValueError(f"more than {BINARY_DIGITS} binary digits")
     return float(body) if radix == 10 else float(int(body, radix))
 
 
@@ -57,7 +64,13 @@ class _ToAst(Transformer):
 
     # ---- expressions
     def number(self, meta, children):
-        return ast.Num(parse_number(str(children[0])))
+        text = str(children[0])
+        try:
+            value = parse_number(text)
+        except ValueError:
+            raise ProgramError(f"{msg.message(msg.SYNTAX_ERROR)} bad number {text}", msg.SYNTAX_ERROR,
+                               line=meta.line, column=meta.column) from None
+        return ast.Num(value, double=text[:2].upper() == "^D")
 
     def string(self, meta, children):
         return ast.Str(str(children[0])[1:-1])
@@ -79,7 +92,10 @@ class _ToAst(Transformer):
         return inner
 
     def variable_ref(self, meta, children):
-        return ast.Var(normalize_name(str(children[0])), [] if len(children) > 1 else None)
+        return ast.Var(normalize_name(str(children[0])))
+
+    def array_ref(self, meta, children):
+        return ast.Var(normalize_name(str(children[0])), [])
 
     def call(self, meta, children):
         return ast.Call(str(children[0]).upper(), children[1])
@@ -98,7 +114,7 @@ class _ToAst(Transformer):
     def neg(self, meta, children):
         operand = children[0]
         if isinstance(operand, ast.Num):
-            return ast.Num(-operand.value)
+            return ast.Num(-operand.value, operand.double)
         return ast.Unary("-", operand)
 
     def not_(self, meta, children):
@@ -119,6 +135,9 @@ class _ToAst(Transformer):
             statement = ast.LabelOnly(**_pos(label))
         if label is not None:
             statement.label = int(str(label).strip())
+            if statement.label > MAX_LABEL:
+                raise ProgramError(f"{msg.message(msg.SYNTAX_ERROR)} step label {statement.label} (0 to {MAX_LABEL})",
+                                   msg.SYNTAX_ERROR, line=label.line, column=label.column)
         return statement
 
     def assignment(self, meta, children):
@@ -132,16 +151,15 @@ class _ToAst(Transformer):
         double = False
         items = []
         for child in children[1:]:
-            if isinstance(child, Token):  # DOUBLE is anonymous; kept for clarity
+            if isinstance(child, Token):  # the DOUBLE keyword
                 double = True
             elif child is not None:
                 items.append(child)
         return ast.Declare(scope, double, items, **_pos(meta))
 
     def decl_item(self, meta, children):
-        var = children[0]
         dims = [c for c in children[1:] if c is not None]
-        return (ast.Var(var.name), dims or None)
+        return (ast.Var(normalize_name(str(children[0]))), dims or None)
 
     def if_goto(self, meta, children):
         return ast.IfGoto(children[0], int(children[1]), **_pos(meta))
@@ -213,8 +231,24 @@ class _ToAst(Transformer):
         value, rotation, *mods = children
         return ast.Speed(value, rotation, [str(m).upper() for m in mods], **_pos(meta))
 
+    def execute_statement(self, meta, children):
+        task, name, args, options = children
+        return ast.ExecuteProgram(task, normalize_name(str(name)), args, options or [], **_pos(meta))
+
     def instruction(self, meta, children):
         return ast.Instruction(str(children[0]).upper(), children[1], **_pos(meta))
+
+    # ---- I/O and keyed statements (lang-library)
+    def io_statement(self, meta, children):
+        name, unit, *items = children
+        return ast.IoStatement(str(name).upper(), unit, [i for i in items if i is not None], **_pos(meta))
+
+    def keyed_assignment(self, meta, children):
+        name, args, value = children
+        return ast.KeyedAssign(str(name).upper(), args, value, **_pos(meta))
+
+    def encode_call(self, meta, children):
+        return ast.Call("$ENCODE", [c for c in children[1:] if c is not None])
 
     # ---- units
     def param(self, meta, children):
@@ -275,10 +309,12 @@ def parse(text: str, file: str = "<string>") -> ast.Module:
         raise _syntax_error(err, text, file) from None
     except VisitError as err:
         if isinstance(err.orig_exc, ProgramError):
-            raise err.orig_exc.located(file=file) from None
+            line = err.orig_exc.line
+            source = text.splitlines()[line - 1] if line else None
+            raise err.orig_exc.located(file=file, text=source) from None
         raise
     source_lines = text.splitlines()
-    module = ast.Module(file, [], [])
+    module = ast.Module(file, [], [], source_lines)
     for unit in units:
         unit.file = file
         if isinstance(unit, ast.Program):

@@ -13,32 +13,27 @@ import sys
 import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Iterator, TextIO
+from typing import Callable, TextIO
 
 import numpy as np
 
 from ...controller.location import Location
+from ...controller.scheduler import NEXT_CYCLE, RELEASE
 from ...errors import ProgramError
 from . import messages as msg
 from . import values
 from .compiler import CompiledProgram, compile_program
+from .fileio import Devices
 from .formats import _fmt, render
 from .keywords import FUNCTIONS, INSTRUCTIONS, STRING_FUNCTIONS
+from .keywords.strings import typed_number
 from .parser import normalize_name, parse, parse_file
+# Parameters and switches with the manuals' defaults and limits.
+from .settings import PARAMETER_DEFAULTS, SWITCH_DEFAULTS, in_range
+from .tasking import HaltProgram, StopProgram, TaskControl
 
-# Parameters and their defaults (V+ guide v17, "System Parameters").
-PARAMETER_DEFAULTS = {"HAND.TIME": 0.05, "BELT.MODE": 0.0, "NOT.CALIBRATED": 0.0, "TERMINAL": 4.0}
-# Switches and their defaults (V+ guide v17, "System Switches").
-SWITCH_DEFAULTS = {
-    "CP": True, "UPPER": True, "MESSAGES": True, "DRY.RUN": False, "BELT": False, "POWER": True,
-    "TRACE": False, "DECEL.100": False, "FORCE": False, "INTERACTIVE": True, "SET.SPEED": True,
-}
 MAJOR_CYCLE = 0.016  # s: the V+ scheduler's major cycle and trajectory period
 MAX_CALL_DEPTH = 200  # "*Too many subroutine calls*" past this many nested CALLs
-
-
-class StopProgram(Exception):
-    """STOP, HALT or RETURN from the top-level program: the task ends normally."""
 
 
 def parse_real(text: str) -> float:
@@ -89,7 +84,8 @@ class Console:
 class VPlusSystem:
     """Controller memory for V+: programs, variables, parameters, switches."""
 
-    def __init__(self, robot, io, clock: Callable[[], float], console: Console | None = None, seed: int = 0):
+    def __init__(self, robot, io, clock: Callable[[], float], console: Console | None = None, seed: int = 0,
+                 sandbox: str | Path | None = None):
         self.robot = robot  # the shared virtual controller (motion, hand)
         self.io = io  # digital signals
         self.clock = clock  # simulated time, s
@@ -100,7 +96,15 @@ class VPlusSystem:
         self.parameters = dict(PARAMETER_DEFAULTS)
         self.switches = dict(SWITCH_DEFAULTS)
         self.random = np.random.default_rng(seed)
-        self.tasks: list[Task] = []
+        self.tasks: list[Task] = []  # every task started, in order; `task(n)` finds the current one
+        self.robot_holder: Task | None = None  # the task the robot is attached to
+        # Where the guides differ, eV+ rules by default; "V+" selects the V+ v17
+        # ones (task 0 attaches the robot when it starts, [000] L899-905).
+        self.dialect = "eV+"
+        self.sources: dict[str, list[str]] = {}  # file -> its lines, for error messages
+        # Logical units; disk files live in `sandbox` (no disk when it is None).
+        self.devices = Devices(sandbox, self.console)
+        self.timers: dict[int, float] = {}  # TIMER n = value: the clock reading that timer n counts from
 
     # ------------------------------------------------------------ loading
     def load(self, path: str | Path) -> list[str]:
@@ -111,9 +115,14 @@ class VPlusSystem:
         return self._load_module(parse(text, file))
 
     def _load_module(self, module) -> list[str]:
+        self.sources[module.file] = module.lines
         names = []
         for program in module.programs:
-            compiled = compile_program(program)
+            try:
+                compiled = compile_program(program)
+            except ProgramError as err:
+                err.located(file=program.file, program=program.name)
+                raise err.located(text=self.source_line(program.file, err.line or 0)) from None
             namespace = dict(_NAMESPACE)
             code = compile(compiled.source, f"<vplus:{program.name}>", "exec")
             exec(code, namespace)
@@ -126,59 +135,96 @@ class VPlusSystem:
             load_data_section(section, self.globals)
         return names
 
+    def source_line(self, file: str, line: int) -> str | None:
+        lines = self.sources.get(file, [])
+        return lines[line - 1] if 0 < line <= len(lines) else None
+
     def define_location(self, name: str, location: Location) -> None:
         self.globals[normalize_name(name)] = location
 
     # ------------------------------------------------------------ tasks
-    def start(self, program: str, number: int = 0, args: list | None = None) -> "Task":
+    def start(self, program: str, number: int = 0, args: list | None = None, cycles: int = 1) -> "Task":
+        """EXECUTE: run `program` in task `number` (`cycles` < 0: for ever)."""
         name = normalize_name(program)
         if name not in self.programs:
             raise ProgramError(f"{msg.message(msg.UNDEFINED_PROGRAM)} {program}", msg.UNDEFINED_PROGRAM)
-        task = Task(self, number, name, args or [])
+        running = self.task(number)
+        if running is not None and not running.finished:
+            raise values.fail(msg.TASK_RUNNING, f"task {number}")
+        task = Task(self, number, name, args or [], cycles)
         self.tasks.append(task)
         return task
 
+    def task(self, number: int) -> "Task | None":
+        """The task most recently started under `number`."""
+        for task in reversed(self.tasks):
+            if task.number == number:
+                return task
+        return None
+
+    def status(self) -> list[dict]:
+        """What the monitor's STATUS command shows, per task (the latest run
+        of each task number): program, state, the step it is at, program
+        priority and cycles left."""
+        rows = []
+        for number in sorted({t.number for t in self.tasks}):
+            task = self.task(number)
+            where = task.current_step()
+            state = ("error" if task.error is not None else "idle") if task.finished else (
+                "paused" if task.paused else "running")
+            rows.append({"task": number, "program": task.program, "state": state,
+                         "at": where, "priority": task.program_priority, "cycles": task.cycles})
+        return rows
+
+    def proceed(self, number: int = 0) -> None:
+        """PROCEED: a paused task goes on after its PAUSE."""
+        task = self.task(number)
+        if task is None or task.finished or not task.paused:
+            raise values.fail(msg.ILLEGAL_OPERATION, f"task {number} is not paused")
+        task.paused = False
+
 
 class _Slice:
-    """Yielded at the end of a time slice: resume at the next major cycle."""
+    """Yielded when a task has used up its 1 ms time slice: it goes on in a later slice."""
 
     def __repr__(self) -> str:
         return "SLICE"
 
 
-class Task:
+class Task(TaskControl):
     """One V+ task running a program.  `rt` in the generated code."""
 
     SLICE = _Slice()
+    RELEASE = RELEASE
+    NEXT_CYCLE = NEXT_CYCLE
 
-    def __init__(self, system: VPlusSystem, number: int, program: str, args: list):
+    def __init__(self, system: VPlusSystem, number: int, program: str, args: list, cycles: int = 1):
         self.system = system
         self.number = number
         self.program = program
         self.globals = system.globals
-        self.robot = system.robot
         self.io = system.io
         self.random = system.random
         self.depth = 0
         self.last_error: int | None = None
         self.error: ProgramError | None = None
         self.finished = False
-        self.generator = self._run(args)
+        self.init_control(cycles)
+        self.generator = self._drive(args)
+        if number == 0 and system.dialect == "V+" and system.robot is not None and system.robot_holder is None:
+            system.robot_holder = self
 
-    # ------------------------------------------------------------ running
-    def _run(self, args: list) -> Iterator:
-        try:
-            yield from self.call(self.program, args)
-        except StopProgram:
-            pass
-        except ProgramError as err:
-            self.error = self._locate(err, err.__traceback__)
-            self.last_error = err.code
-        except (KeyError, NameError, ZeroDivisionError, TypeError, IndexError) as err:
-            self.error = self._translate(err)
-            self.last_error = self.error.code
-        finally:
-            self.finished = True
+    @property
+    def robot(self):
+        """The robot; a task that does not hold it may read it but not move it."""
+        robot = self.system.robot
+        if robot is None or self.system.robot_holder is self:
+            return robot
+        return _RobotOfAnotherTask(robot, self)
+
+    def ended(self) -> None:
+        """The task ended without an error: detach its units and close its files."""
+        self.system.devices.release_task(self.number)
 
     def _frames(self, tb) -> list[tuple[CompiledProgram, int]]:
         found = []
@@ -189,16 +235,17 @@ class Task:
         return found
 
     def _locate(self, err: ProgramError, tb) -> ProgramError:
-        frames = self._frames(tb)
-        if frames:
-            compiled, lineno = frames[-1]
+        # The innermost step that has one: an error in a program's prologue
+        # (its arguments) belongs to the CALL that passed them.
+        for compiled, lineno in reversed(self._frames(tb)):
             statement = compiled.line_map.get(lineno)
             if statement is not None:
                 err.located(
                     file=compiled.file, line=statement.line, column=statement.column,
                     step=statement.step, program=compiled.name,
-                    text=_source_line(compiled.file, statement.line),
+                    text=self.system.source_line(compiled.file, statement.line),
                 )
+                break
         return err
 
     def _translate(self, err: Exception) -> ProgramError:
@@ -241,10 +288,14 @@ class Task:
     def zero_step(self) -> None:
         raise values.fail(msg.ILLEGAL_VALUE, "FOR loop STEP 0")
 
+    def loop_not_started(self) -> None:
+        raise values.fail(msg.CONTROL_STRUCTURE, "a FOR loop entered by GOTO, not through its FOR step")
+
     def stop(self) -> None:
         raise StopProgram()
 
-    halt = stop
+    def halt(self) -> None:
+        raise HaltProgram()
 
     # ------------------------------------------------------------ time
     def sleep(self, seconds: float):
@@ -275,14 +326,13 @@ class Task:
         return line
 
     def prompt_number(self, text: str) -> float:
-        try:
-            return float(text.strip())
-        except ValueError:
-            raise values.fail(msg.ILLEGAL_VALUE, f"not a number: {text!r}") from None
+        return typed_number(text)
 
     # ------------------------------------------------------------ settings
     def set_parameter(self, name: str, index, value) -> None:
         key = _pick(self.system.parameters, name)
+        if not in_range(key, values._real(value)):
+            raise values.fail(msg.ILLEGAL_VALUE, f"{key} = {value}")
         self.system.parameters[key] = values._real(value)
 
     def switch(self, name: str) -> bool:
@@ -297,11 +347,25 @@ class Task:
                              units="MMPS" if "MMPS" in modifiers else "IPS" if "IPS" in modifiers else None)
 
 
-def _source_line(file: str, line: int) -> str | None:
-    try:
-        return Path(file).read_text(encoding="latin-1").splitlines()[line - 1]
-    except (OSError, IndexError):
-        return None
+class _RobotOfAnotherTask:
+    """The robot as seen by a task it is not attached to: reading it (HERE,
+    DEST, SPEED()) is fine; the first motion attaches it to task 0, and in
+    any other task is "*Robot not attached to this program*" ([000] L899-930)."""
+
+    # What moves the robot or changes its TOOL, BASE or motion settings (the
+    # motion branch's controller adds drive, set_tool...); BRAKE (stop) is
+    # allowed from any task ([000] L4592-4595).
+    _MOTION = {"move", "drive", "dwell", "wait_stopped", "hand", "hand_at_next_motion", "request_configuration",
+               "set_speed", "set_accel", "set_duration", "set_modifier", "set_tool", "set_base"}
+
+    def __init__(self, robot, task: Task):
+        self._robot = robot
+        self._task = task
+
+    def __getattr__(self, name: str):
+        if name in self._MOTION:
+            return getattr(self._task.robot_for_motion(), name)
+        return getattr(self._robot, name)
 
 
 # The names the generated code sees.
@@ -309,5 +373,7 @@ _NAMESPACE = {
     "F": {**FUNCTIONS, **STRING_FUNCTIONS},
     "I": {name: spec.function for name, spec in INSTRUCTIONS.items()},
     "_fmt": _fmt,
+    # What a step may raise that the error trap (REACTE) catches.
+    "_TRAPPED": (ProgramError, KeyError, NameError, ZeroDivisionError, TypeError, IndexError),
     **{name: getattr(values, name) for name in dir(values) if name.startswith("_") and not name.startswith("__")},
 }

@@ -34,6 +34,12 @@ class _Nester:
             statement = self.statements[self.pos]
             if isinstance(statement, stops):
                 self.pos += 1
+                if statement.label is not None:
+                    # A label on ELSE, END, UNTIL, VALUE or ANY: a GOTO to it
+                    # lands where that step would go on, the end of the
+                    # block it closes.
+                    body.append(ast.LabelOnly(line=statement.line, column=statement.column,
+                                              step=statement.step, label=statement.label))
                 return body, statement
             if isinstance(statement, (ast.Else, ast.End, ast.UntilTail, ast.ValueClause, ast.AnyClause)):
                 raise _error(statement, f"unexpected {type(statement).__name__.replace('Clause', '').replace('Tail', '').upper()}")
@@ -78,6 +84,9 @@ class _Nester:
         self.pos += 1
         while True:
             body, stop = self.require(head, (ast.ValueClause, ast.AnyClause, ast.End), "END")
+            if clause.label is not None and not cases and default is None:
+                body.insert(0, ast.LabelOnly(line=clause.line, column=clause.column, step=clause.step,
+                                             label=clause.label))
             if isinstance(clause, ast.ValueClause):
                 cases.append((clause.values, body))
             elif isinstance(clause, ast.AnyClause):

@@ -8,6 +8,7 @@ Reals are Python floats, strings are `str`, transformations are
 from __future__ import annotations
 
 import math
+import struct
 
 from ...controller.location import Location
 from ...errors import ProgramError
@@ -16,6 +17,7 @@ from . import messages as msg
 TRUE = -1.0
 FALSE = 0.0
 MAX_STRING = 128  # V+ guide v17, "String Data Type": 0..128 characters
+_SINGLE = struct.Struct("<f")
 
 
 class VArray(dict):
@@ -92,6 +94,34 @@ def _real(value) -> float:
     return float(value)
 
 
+def single(value: float) -> float:
+    """A real as a (32-bit IEEE) single-precision V+ real holds it: reals are
+    single precision unless declared DOUBLE (V+ guide v17 L3868-3895)."""
+    return _SINGLE.unpack(_SINGLE.pack(value))[0]
+
+
+def _single(value) -> float:
+    """Store into a real variable: a real, rounded to single precision."""
+    try:
+        return _SINGLE.unpack(_SINGLE.pack(value))[0]
+    except OverflowError:
+        raise fail(msg.OVERFLOW, f"{value:g} is beyond single precision") from None
+    except struct.error:
+        raise fail(msg.WRONG_TYPE, "real value expected") from None
+
+
+def _argument(value, kind: str, name: str):
+    """A CALL argument for parameter `name`: a string for a $ parameter, an
+    array for a[], a real or location (not a string) for the others."""
+    if kind == "array":
+        ok = isinstance(value, VArray)
+    else:
+        ok = isinstance(value, str) == (kind == "string") and not isinstance(value, VArray)
+    if not ok:
+        raise fail(msg.WRONG_TYPE, f"argument for {name}")
+    return value
+
+
 def _location(value) -> Location:
     if not isinstance(value, Location):
         raise fail(msg.WRONG_TYPE, "location expected")
@@ -109,8 +139,24 @@ def _array(table: dict, key: str) -> VArray:
     return array
 
 
-def _new_array() -> VArray:
-    return VArray()
+class AutoArray(VArray):
+    """An AUTO array: it has the size its declaration gives (the highest index
+    of each dimension) and, unlike GLOBAL and LOCAL arrays, does not grow
+    ([000] L3995-3997, L4028-4030)."""
+
+    def __init__(self, limits: tuple[int, ...]):
+        super().__init__()
+        self.limits = limits
+
+    def __setitem__(self, index, value) -> None:
+        indices = index if isinstance(index, tuple) else (index,)
+        if len(indices) != len(self.limits) or any(i > limit for i, limit in zip(indices, self.limits)):
+            raise fail(msg.ILLEGAL_ARRAY_INDEX, f"{list(indices)} beyond AUTO array size {list(self.limits)}")
+        super().__setitem__(index, value)
+
+
+def _auto_array(limits: tuple[int, ...]) -> AutoArray:
+    return AutoArray(limits)
 
 
 def _defined_element(table: dict, key: str, index) -> float:
@@ -119,9 +165,13 @@ def _defined_element(table: dict, key: str, index) -> float:
 
 
 def _program_name(value) -> str:
+    """CALLS: the program named by a string."""
     from .parser import normalize_name
 
-    return normalize_name(_str(value).strip())
+    name = _str(value).strip()
+    if not name:
+        raise fail(msg.UNDEFINED_PROGRAM, "empty program name")
+    return normalize_name(name)
 
 
 def truth(value) -> float:

@@ -1,6 +1,7 @@
 """The V+ keyword tables: instructions and functions, name -> implementation.
 
-One module per domain (motion, program, numbers, strings, locations); each
+One module per domain (motion, program, numbers, strings, locations, system:
+switches, parameters, timers and signals, files: logical-unit I/O); each
 registers its keywords with the decorators below when it is imported.
 
 Like the controller's own keyword tables, a name is looked up here when the
@@ -24,6 +25,11 @@ class InstructionSpec:
     function: Callable
     waits: bool = False  # a generator: called with `yield from`
     names: bool = False  # arguments are keyword names (ENABLE CP), not expressions
+    # Written by the instruction: READ's items are variables it returns values
+    # for; a keyed instruction's array argument (DECOMPOSE a[] = ...) is passed
+    # as (array, index).
+    targets: bool = False
+    returns_unit: bool = False  # ATTACH (lun, 4): the unit number it returns goes into `lun`
 
 
 INSTRUCTIONS: dict[str, InstructionSpec] = {}
@@ -31,21 +37,33 @@ FUNCTIONS: dict[str, Callable] = {}
 STRING_FUNCTIONS: dict[str, Callable] = {}
 
 
-def instruction(name: str, waits: bool = False, names: bool = False):
+# Functions that also assign to their first argument ($DECODE, TAS): they
+# return (result, new value of the first argument).
+WRITES_FIRST_ARGUMENT: set[str] = set()
+# Functions whose arguments are names, not expressions: PARAMETER(HAND.TIME), SWITCH(CP).
+NAME_ARGUMENTS: set[str] = set()
+
+
+def instruction(name: str, waits: bool = False, names: bool = False, targets: bool = False,
+                returns_unit: bool = False):
     def register(function):
-        INSTRUCTIONS[name] = InstructionSpec(function, waits, names)
+        INSTRUCTIONS[name] = InstructionSpec(function, waits, names, targets, returns_unit)
         return function
 
     return register
 
 
-def function(name: str):
+def function(name: str, writes_first: bool = False, names: bool = False):
     def register(fn):
         (STRING_FUNCTIONS if name.startswith("$") else FUNCTIONS)[name] = fn
+        if writes_first:
+            WRITES_FIRST_ARGUMENT.add(name)
+        if names:
+            NAME_ARGUMENTS.add(name)
         return fn
 
     return register
 
 
 # The domain modules register themselves on import (after the registry exists).
-from . import locations, motion, numbers, program, strings  # noqa: E402,F401
+from . import files, locations, motion, numbers, program, strings, system  # noqa: E402,F401

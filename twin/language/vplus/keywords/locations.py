@@ -8,8 +8,8 @@ import numpy as np
 
 from ....controller.location import NULL, Location, trans
 from .. import messages as msg
-from ..values import fail
-from . import function
+from ..values import FALSE, TRUE, fail
+from . import function, instruction
 
 DEG = math.pi / 180.0
 
@@ -93,3 +93,67 @@ def _rotation(axis: int, angle: float):
     m[i, i] = m[j, j] = c
     m[i, j], m[j, i] = -s, s
     return m
+
+
+@function("FRAME")
+def _frame(rt, x1, x2, y, origin):
+    """FRAME(p1, p2, p3, p4): X from p1 towards p2, Y in the plane of p3 on its
+    +Y side, origin at p4 (V+ guide v17, "Defining a Reference Frame")."""
+    p1, p2, p3, p4 = (location_arg(p).position() for p in (x1, x2, y, origin))
+    x_axis = p2 - p1
+    if np.linalg.norm(x_axis) < 1e-9:
+        raise fail(msg.ILLEGAL_VALUE, "FRAME: the first two points coincide")
+    x_axis = x_axis / np.linalg.norm(x_axis)
+    y_axis = (p3 - p1) - np.dot(p3 - p1, x_axis) * x_axis
+    if np.linalg.norm(y_axis) < 1e-9:
+        raise fail(msg.ILLEGAL_VALUE, "FRAME: the three points are in line")
+    y_axis = y_axis / np.linalg.norm(y_axis)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = x_axis, y_axis, np.cross(x_axis, y_axis), p4
+    return Location.from_matrix(m)
+
+
+@function("SCALE")
+def _scale(rt, loc, factor):
+    """SCALE(t BY k): the position multiplied by k, the orientation kept."""
+    loc = location_arg(loc)
+    return Location(loc.x * factor, loc.y * factor, loc.z * factor, loc.yaw, loc.pitch, loc.roll)
+
+
+@function("NORMAL")
+def _normal(rt, loc):
+    # A Location is rebuilt from its angles every time, so its rotation is
+    # always orthonormal: there is no round-off to remove.
+    return location_arg(loc)
+
+
+@function("IDENTICAL")
+def _identical(rt, a, b):
+    """True when the two transformations are the same (to 1e-6 of a mm or a degree
+    in their matrices, the canonical angles being rebuilt from them)."""
+    same = np.allclose(location_arg(a).matrix(), location_arg(b).matrix(), atol=1e-6)
+    return TRUE if same else FALSE
+
+
+@function("#PPOINT")
+def _ppoint(rt, *joints):
+    """#PPOINT(j1, j2, ...): a precision point (one value per joint)."""
+    return tuple(0.0 if j is None else float(j) for j in joints)
+
+
+@instruction("DECOMPOSE", targets=True)
+def _decompose(rt, value, target):
+    """DECOMPOSE a[i] = loc: x, y, z, yaw, pitch, roll (or a precision point's
+    joints) into a[i], a[i+1], ..."""
+    if isinstance(value, Location):
+        parts = value.components()
+    elif isinstance(value, tuple):
+        parts = value
+    else:
+        raise fail(msg.WRONG_TYPE, "location expected")
+    if not isinstance(target, tuple):
+        raise fail(msg.WRONG_TYPE, "DECOMPOSE needs an array")
+    array, start = target
+    start = start or 0
+    for i, part in enumerate(parts):
+        array[start + i] = float(part)

@@ -1,9 +1,9 @@
-"""Program control, switches, digital signals, errors, tasks and timers."""
+"""Program control and errors: STOP, HALT, WAIT, ERROR, $ERROR, TASK."""
 
 from __future__ import annotations
 
 from .. import messages as msg
-from ..values import to_int, truth
+from ..values import to_int
 from . import function, instruction
 
 
@@ -22,55 +22,26 @@ def _wait(rt):
     yield rt.SLICE  # bare WAIT: sleep until the next major cycle
 
 
-@instruction("SIGNAL")
-def _signal(rt, *signals):
-    for s in signals:
-        if s is not None:
-            rt.io.signal(to_int(s))
-
-
-@instruction("ENABLE", names=True)
-def _enable(rt, *names):
-    for name in names:
-        rt.set_switch(name, True)
-
-
-@instruction("DISABLE", names=True)
-def _disable(rt, *names):
-    for name in names:
-        rt.set_switch(name, False)
-
-
-
-
 @function("$ERROR")
 def _error_text(rt, code):
+    """$ERROR(code): the controller's message for an error code."""
     return msg.message(to_int(code))
 
 
 @function("ERROR")
-def _error_code(rt, *args):
-    return float(rt.last_error or 0)
-
-
-@function("SIG")
-def _sig(rt, *signals):
-    return truth(all(rt.io.sig(to_int(s)) for s in signals))
-
-
-@function("SWITCH")
-def _switch(rt, name):
-    return truth(rt.switch(name))
+def _error_code(rt, source=None, select=None):
+    """ERROR(task): the code of the latest error of a task (this one when the
+    task is omitted or -1), 0 if it has had none."""
+    number = rt.number if source is None or to_int(source) < 0 else to_int(source)
+    for task in [rt, *rt.system.tasks]:
+        if task.number == number:
+            return float(task.last_error or 0)
+    return 0.0
 
 
 @function("TASK")
 def _task(rt, *args):
     return float(rt.number)
-
-
-@function("TIMER")
-def _timer(rt, number=0):
-    return rt.timer(to_int(number))
 
 
 @function("SPEED")

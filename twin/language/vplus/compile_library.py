@@ -1,0 +1,148 @@
+"""Compiling the library's statement forms (a mixin of `ProgramCompiler`).
+
+* `IoStatement`: `KEYWORD (unit...) items` -> `I[name](rt, (unit...), (items...))`.
+  READ's items are variables: the instruction returns one value per variable
+  (None leaves it unchanged, as after an end of file) and the compiled code
+  assigns them.  ATTACH (lun, 4) returns the unit it picked, written into lun,
+  which may still be undefined before the statement.
+* `KeyedAssign`: `KEYWORD args = value` -> `I[name](rt, value, args...)`.
+* GETC(lun) in wait mode: a function cannot wait, so the step first waits
+  (`yield from`) until the unit has a byte, then runs; GETC finds it there.
+* Functions that assign to their first argument ($DECODE, TAS) return
+  (result, new value); the expression stores the new value with `:=`, so an
+  AUTO variable (a Python local) can be written from inside an expression.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+from ...errors import ProgramError
+from . import ast
+from . import messages as msg
+from .keywords import INSTRUCTIONS, NAME_ARGUMENTS, WRITES_FIRST_ARGUMENT
+
+FORMAT_ARGUMENTS = {"$ENCODE"}  # arguments are TYPE items: expressions and /I0, /F8.3 ...
+ARRAY_ARGUMENTS = {"$UNPACK"}  # the first argument $a[i] is passed as (array, index)
+LIBRARY_CALLS = WRITES_FIRST_ARGUMENT | NAME_ARGUMENTS | FORMAT_ARGUMENTS | ARRAY_ARGUMENTS
+
+
+def _calls(node, name: str):
+    """The calls of `name` in a simple statement's expressions."""
+    if isinstance(node, ast.Call) and node.name == name:
+        yield node
+    if isinstance(node, list):
+        for item in node:
+            yield from _calls(item, name)
+    elif dataclasses.is_dataclass(node):
+        for f in dataclasses.fields(node):
+            yield from _calls(getattr(node, f.name), name)
+
+
+class LibraryStatements:
+    # ------------------------------------------------------------ statements
+    def s_IoStatement(self, s: ast.IoStatement, depth: int) -> None:
+        spec = INSTRUCTIONS.get(s.name)
+        if spec is None:
+            raise self.error(s, msg.UNKNOWN_KEYWORD, s.name)
+        unit = ["None" if a is None else self.expr(a) for a in s.unit]
+        unit_var = s.unit[0] if s.unit and isinstance(s.unit[0], ast.Var) else None
+        if spec.returns_unit and unit_var is not None:
+            unit[0] = self.peek(unit_var)
+        if spec.targets:
+            if not all(isinstance(item, ast.Var) for item in s.items):
+                raise self.error(s, msg.INVALID_ARGUMENT, f"{s.name} needs variables")
+            items = [repr("s" if item.name.startswith("$") else "r") for item in s.items]
+        else:
+            items = [self.io_item(item) for item in s.items]
+        result = self.fresh("io")
+        call = f"I[{s.name!r}](rt, ({''.join(u + ', ' for u in unit)}), ({''.join(i + ', ' for i in items)}))"
+        self.emit(depth, f"{result} = {'yield from ' if spec.waits else ''}{call}")
+        if spec.targets:
+            for i, item in enumerate(s.items):
+                self.emit(depth, f"if {result}[{i}] is not None:")
+                self.assign(item, f"{result}[{i}]", depth + 1)
+        if spec.returns_unit and unit_var is not None:
+            self.emit(depth, f"if {result} is not None:")
+            self.assign(unit_var, result, depth + 1)
+
+    def io_item(self, item) -> str:
+        if isinstance(item, ast.Format):
+            return f"_fmt({item.code!r}, {item.width!r}, {item.decimals!r})"
+        return self.expr(item)
+
+    def s_KeyedAssign(self, s: ast.KeyedAssign, depth: int) -> None:
+        spec = INSTRUCTIONS.get(s.name)
+        if spec is None:
+            raise self.error(s, msg.UNKNOWN_KEYWORD, s.name)
+        args = []
+        for a in s.args:
+            if a is None:
+                args.append("None")
+            elif spec.names and isinstance(a, ast.Var):
+                args.append(repr(a.name.upper()))
+            elif spec.targets and isinstance(a, ast.Var) and a.indices is not None:
+                args.append(self.array_ref(a))
+            else:
+                args.append(self.expr(a))
+        self.emit(depth, f"I[{s.name!r}](rt, {self.expr(s.value)}{''.join(', ' + a for a in args)})")
+
+    def wait_for_input(self, s: ast.Statement, depth: int) -> None:
+        """Called for simple statements only (not for IF/WHILE/... heads)."""
+        for call in _calls(s, "GETC"):
+            mode = call.args[1] if len(call.args) > 1 else None
+            if call.args and call.args[0] is not None and (mode is None or (isinstance(mode, ast.Num) and mode.value == 0)):
+                self.emit(depth, f"yield from rt.system.devices.wait_for_byte(rt, {self.expr(call.args[0])})")
+
+    # ----------------------------------------------------------- references
+    def peek(self, var: ast.Var) -> str:
+        """The variable's value, or None while it is undefined."""
+        if var.indices:
+            return self.expr(var)
+        key = self.key(var)
+        if key in self.scope.auto:
+            return f"locals().get({self.pyname(var)!r})"
+        return f"{'L' if key in self.scope.local else 'G'}.get({key!r})"
+
+    def array_store(self, var: ast.Var) -> str:
+        whole = ast.Var(var.name, [])
+        key = self.key(whole)
+        if key in self.scope.auto:
+            return self.pyname(whole)
+        return f"_array({'L' if key in self.scope.local else 'G'}, {key!r})"
+
+    def array_ref(self, var: ast.Var) -> str:
+        """(array, index) for `a[i]`, (array, None) for the whole array `a[]`."""
+        index = self.index(var.indices) if var.indices else "None"
+        return f"({self.array_store(var)}, {index})"
+
+    def assign_expr(self, var: ast.Var, value: str) -> str:
+        """An expression that stores `value` in `var`."""
+        if var.indices:
+            return f"{self.array_store(var)}.__setitem__({self.index(var.indices)}, {value})"
+        key = self.key(var)
+        if key in self.scope.auto:
+            return f"({self.pyname(var)} := {value})"
+        return f"{'L' if key in self.scope.local else 'G'}.__setitem__({key!r}, {value})"
+
+    def library_call(self, e: ast.Call) -> str:
+        if e.name in FORMAT_ARGUMENTS:
+            return f"F[{e.name!r}](rt{''.join(', ' + self.io_item(a) for a in e.args)})"
+        if e.name in ARRAY_ARGUMENTS:
+            first = e.args[0] if e.args else None
+            if not isinstance(first, ast.Var) or not first.indices:
+                raise ProgramError(msg.message(msg.INVALID_ARGUMENT) + f" {e.name} needs an array element",
+                                   msg.INVALID_ARGUMENT)
+            rest = "".join(", " + ("None" if a is None else self.expr(a)) for a in e.args[1:])
+            return f"F[{e.name!r}](rt, {self.array_ref(first)}{rest})"
+        if e.name in NAME_ARGUMENTS:
+            # A bare name is the name itself; anything else (a string) is evaluated.
+            args = [repr(a.name.upper()) if isinstance(a, ast.Var) and a.indices is None
+                    else "None" if a is None else self.expr(a) for a in e.args]
+            return f"F[{e.name!r}](rt{''.join(', ' + a for a in args)})"
+        if not e.args or not isinstance(e.args[0], ast.Var):
+            raise ProgramError(msg.message(msg.INVALID_ARGUMENT) + f" {e.name} needs a variable",
+                               msg.INVALID_ARGUMENT)
+        result = self.fresh("wb")
+        args = ", ".join("None" if a is None else self.expr(a) for a in e.args)
+        return f"({result} := F[{e.name!r}](rt, {args}), {self.assign_expr(e.args[0], f'{result}[1]')})[0][0]"

@@ -1,0 +1,236 @@
+"""Logical-unit I/O: ATTACH, DETACH, FOPEN_, READ, WRITE, GETC, IOSTAT ...
+(V+ guide v17, "Input/Output Control"; the devices are in ../fileio.py).
+
+Each instruction takes `unit` (what its parentheses hold: lun, mode, record
+...) and `items` (what follows).  The outcome of every operation is stored as
+IOSTAT(lun); an I/O error never stops the program.
+"""
+
+from __future__ import annotations
+
+from .. import messages as msg
+from ..fileio import RETURN_LUN, TERMINAL_LUN, IoError
+from ..formats import render
+from ..values import MAX_STRING, _str, fail, to_int
+from . import function, instruction
+from .strings import leading_number
+
+ROBOT_LUN = 0
+
+
+def _arg(unit: tuple, i: int, default: int = 0) -> int:
+    return to_int(unit[i]) if len(unit) > i and unit[i] is not None else default
+
+
+def _devices(rt):
+    return rt.system.devices
+
+
+@instruction("ATTACH", returns_unit=True)
+def _attach(rt, unit: tuple, items: tuple):
+    """ATTACH (lun, mode) $device.  Mode 4 picks a free unit and returns it."""
+    mode = _arg(unit, 1)
+    device = _str(items[0]).strip().upper() if items else None
+    lun = unit[0] if unit else None
+    if not mode & RETURN_LUN and (lun is None or to_int(lun) == ROBOT_LUN):
+        rt.attach_robot()  # ATTACH () / (0): the robot (tasking.py)
+        return None
+    devices = _devices(rt)
+    if device is None:
+        device = "TERMINAL" if lun is not None and to_int(lun) == TERMINAL_LUN else "PENDANT"
+    if mode & RETURN_LUN:
+        try:
+            number = devices.free_lun(rt.number, device)
+        except IoError:
+            return None  # every unit of the kind is taken: lun is left as it was
+    else:
+        number = to_int(lun)
+    devices.run(rt.number, number, devices.attach, device)
+    attached = devices.units.get((rt.number, number))
+    if attached is not None and attached.serial is not None:
+        attached.serial.listener = rt.set_event  # arriving bytes wake WAIT.EVENT
+    return float(number) if mode & RETURN_LUN else None
+
+
+@instruction("DETACH")
+def _detach(rt, unit: tuple, items: tuple):
+    lun = _arg(unit, 0)
+    if lun == ROBOT_LUN:
+        rt.detach_robot()  # DETACH () / (0): the robot is free for another task or the pendant
+    else:
+        _devices(rt).run(rt.number, lun, _devices(rt).detach)
+
+
+def _opener(mode: str):
+    def fopen(rt, unit: tuple, items: tuple):
+        if not items:
+            raise fail(msg.INVALID_ARGUMENT, "file specification")
+        devices = _devices(rt)
+        devices.run(rt.number, _arg(unit, 0), devices.fopen, mode, _str(items[0]), _arg(unit, 1), _arg(unit, 2),
+                    rt.system.dialect)
+
+    return fopen
+
+
+for _name, _mode in (("FOPENR", "R"), ("FOPENW", "W"), ("FOPENA", "A"), ("FOPEND", "D")):
+    instruction(_name)(_opener(_mode))
+
+
+@instruction("FCLOSE")
+def _fclose(rt, unit: tuple, items: tuple):
+    _devices(rt).run(rt.number, _arg(unit, 0), _devices(rt).fclose)
+
+
+@instruction("FDELETE")
+def _fdelete(rt, unit: tuple, items: tuple):
+    if not items:
+        raise fail(msg.INVALID_ARGUMENT, "file specification")
+    _devices(rt).run(rt.number, _arg(unit, 0), _devices(rt).fdelete, _str(items[0]))
+
+
+@instruction("FSEEK")
+def _fseek(rt, unit: tuple, items: tuple):
+    record = to_int(items[0]) if items else _arg(unit, 1)
+    _devices(rt).run(rt.number, _arg(unit, 0), _devices(rt).fseek, record)
+
+
+@instruction("FEMPTY")
+def _fempty(rt, unit: tuple, items: tuple):
+    # WRITE goes straight to the file: there is never a buffer to empty.
+    devices = _devices(rt)
+    devices.run(rt.number, _arg(unit, 0), devices.unit)
+
+
+@instruction("FSET")
+def _fset(rt, unit: tuple, items: tuple):
+    # Serial and terminal attributes (baud rate, parity...) change nothing on
+    # an in-memory line; windows are absent.
+    devices = _devices(rt)
+
+    def check(task, lun):
+        if devices.unit(task, lun).device == "DISK":
+            raise IoError(msg.ILLEGAL_IO_COMMAND)
+
+    devices.run(rt.number, _arg(unit, 0), check)
+
+
+def _refuse(rt, unit: tuple, items: tuple):
+    """An operation the unit's device cannot do: *Not attached to logical unit*
+    when nothing is attached, else *Illegal I/O device command* (IOSTAT)."""
+    devices = _devices(rt)
+
+    def refuse(task, lun):
+        devices.unit(task, lun)
+        raise IoError(msg.ILLEGAL_IO_COMMAND)
+
+    devices.run(rt.number, _arg(unit, 0), refuse)
+
+
+# FCMND: rename, format, mkdir, rmdir and DDCMP settings; their command numbers
+# are in the Language Reference Guide, which we do not have.
+instruction("FCMND")(_refuse)
+
+
+@instruction("WRITE")
+def _write(rt, unit: tuple, items: tuple):
+    """WRITE (lun, record) items: formatted like TYPE; CR LF ends the record unless /S."""
+    text, newline = render(items)
+    devices = _devices(rt)
+    devices.run(rt.number, _arg(unit, 0), devices.write, text, newline, _arg(unit, 1))
+
+
+@instruction("READ", waits=True, targets=True)
+def _read(rt, unit: tuple, kinds: tuple):
+    """READ (lun, record) var, ...: one record.  A single variable takes the
+    whole record (a real its leading number, as VAL reads it; a string its
+    first 128 characters); several take the record's comma- or space-separated
+    fields in order.  A serial READ waits for a whole line; after an error the
+    variables keep their values."""
+    devices = _devices(rt)
+    lun, record = _arg(unit, 0), _arg(unit, 1)
+    while True:
+        text = devices.run(rt.number, lun, devices.read_record, record)
+        if text is not None or devices.iostat(rt.number, lun) < 0:
+            break
+        yield rt.SLICE  # a serial line without a whole line yet: wait for it
+    if text is None:
+        return [None] * len(kinds)
+    fields = [text] if len(kinds) == 1 else _fields(text, len(kinds))
+    # A record may hold up to 512 bytes, a string 128: the rest is not kept.
+    return [f[:MAX_STRING] if kind == "s" else leading_number(f) for kind, f in zip(kinds, fields)]
+
+
+def _fields(text: str, count: int) -> list[str]:
+    parts = [p for p in text.replace(",", " ").split(" ") if p]
+    return (parts + [""] * count)[:count]
+
+
+@function("IOSTAT")
+def _iostat(rt, lun, select=None):
+    return _devices(rt).iostat(rt.number, to_int(lun), 0 if select is None else to_int(select))
+
+
+@function("GETC")
+def _getc(rt, lun, mode=None):
+    """GETC(lun, mode): mode 1 is no-wait; in wait mode the step has already
+    waited for a byte (compile_library.py), so both read the same way here."""
+    if mode is not None:
+        to_int(mode)
+    return float(_devices(rt).getc(rt.number, to_int(lun)))
+
+
+@function("PENDANT")
+def _pendant(rt, select):
+    # No pendant is connected: no key is pressed, the speed bar is at rest and
+    # PENDANT(-3) matches none of the states 1-4, so the manuals' programs take
+    # their "busy or not connected" path.
+    to_int(select)
+    return 0.0
+
+
+# Hardware the twin's cell does not have: graphics windows (FOPEN, G*,
+# GETEVENT) act on units ATTACH could never open, so they report
+# *Not attached to logical unit* through IOSTAT; external encoders (SETDEVICE)
+# are absent.
+for _name in ("FOPEN", "GARC", "GCHAIN", "GCLEAR", "GCLIP", "GCOLOR", "GCOPY", "GFLOOD", "GICON", "GLINE",
+              "GLINES", "GLOGICAL", "GPANEL", "GPOINT", "GRECTANGLE", "GSCAN", "GSLIDE", "GTEXTURE", "GTRANS",
+              "GTYPE"):
+    instruction(_name)(_refuse)
+
+
+@instruction("GETEVENT", targets=True)
+def _getevent(rt, unit: tuple, kinds: tuple):
+    _refuse(rt, unit, ())
+    return [None] * len(kinds)
+
+
+def _no_pendant(rt, *args):
+    # The T20 pendant screens of eV+ ([001] "Programming the T20 Pendant"):
+    # with no pendant connected there is nothing to draw on.
+    raise fail(msg.DEVICE_NOT_READY, "no pendant is connected")
+
+
+for _name in ("PDNT.WRITE", "PDNT.NOTIFY", "PDNT.CLEAR"):
+    instruction(_name)(_no_pendant)
+
+
+def _no_camera(rt, *args):
+    # The vision option ([000] "label.blob()"): the twin's cell has no camera.
+    raise fail(msg.DEVICE_NOT_READY, "no vision system is installed")
+
+
+for _name in ("VDISPLAY", "VPICTURE", "VLOCATE"):
+    instruction(_name)(_no_camera)
+function("VFEATURE")(_no_camera)
+
+
+@instruction("SETDEVICE")
+def _setdevice(rt, unit: tuple, items: tuple):
+    raise fail(msg.DEVICE_NOT_READY, "no external encoder is installed")
+
+
+@instruction("KEYMODE")
+def _keymode(rt, mode, first, last=None):
+    # Key modes of a pendant that is not connected: nothing to change.
+    to_int(mode)
+
