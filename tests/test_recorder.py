@@ -24,6 +24,8 @@ RERUN_CLI = Path(sys.executable).parent / "rerun"
 def cell() -> mujoco.MjModel:
     """The Cobra s600, a floor, and a box that falls freely (2 ms step)."""
     spec = mujoco.MjSpec.from_file(str(ROBOT))
+    # The stiff servos need the implicit integrator the cells use (explicit Euler diverges).
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     world = spec.worldbody
     world.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.1], rgba=[0.3, 0.3, 0.3, 1])
     box = world.add_body(name="box", pos=[-0.5, -0.5, 0.8], quat=[0.9659258, 0, 0, 0.2588190])
