@@ -51,7 +51,7 @@ def run_on_cell(text: str, scene: Path = SCARA, locations: dict | None = None, m
     system = VPlusSystem(sim.controller, sim.io, sim.clock, console=Console(echo=None))
     for name, loc in {**sim.taught_locations(), **(locations or {})}.items():
         system.define_location(name, loc)
-    (name,) = system.load_text(text, "test.pg")
+    name = system.load_text(text, "test.pg")[0]  # the first program is the main one
     task = system.start(name)
     sim.scheduler.add(task)
     outcome = sim.run(max_sim_time=max_time)

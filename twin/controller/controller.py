@@ -48,6 +48,13 @@ TRAJECTORY_CYCLE_S = 0.016  # V+ trajectory generator period (62.5 Hz, V+ guide 
 PLAN_CACHE = 64  # planned trajectories kept for reuse
 MM = 1000.0
 MM_PER_INCH = 25.4
+CONFIG_RIGHTY = 1  # CONFIG() bits: RIGHTY (else LEFTY); BELOW = 2 and FLIP = 4 never apply here
+# INRANGE() bits besides a joint limit (joint n: 2^(n-1)); twin-defined (docs/motion.md).
+INRANGE_TOO_CLOSE = 0x100
+INRANGE_TOO_FAR = 0x200
+INRANGE_ORIENTATION = 0x400
+_OUT_OF_RANGE_BITS = {"too close to the J1 axis": INRANGE_TOO_CLOSE, "beyond the reach of the arm": INRANGE_TOO_FAR,
+                      "no converged solution": INRANGE_TOO_FAR, "tool not vertical": INRANGE_ORIENTATION}
 
 
 @dataclass
@@ -64,6 +71,7 @@ class MotionParameters:
     single: bool  # wrist within +/-180 deg (SINGLE)
     coarse: bool  # COARSE: the looser end-of-motion tolerance
     null: bool  # NULL: a stop waits for the position errors to be nulled
+    overlap: bool  # OVERLAP: a multi-turn joint may not turn more than 180 deg to avoid a limit
 
 
 @dataclass
@@ -87,6 +95,8 @@ class MotionSettings:
     single: bool = False  # SINGLE / MULTIPLE ALWAYS
     coarse: bool = False  # COARSE / FINE ALWAYS
     null: bool = True  # NULL / NONULL ALWAYS
+    overlap: bool = False  # OVERLAP / NOOVERLAP ALWAYS (docs/motion.md: NOOVERLAP at start-up)
+    payload: float = 0.0  # PAYLOAD, % of the maximum payload (recorded: see docs/motion.md)
     next: dict = field(default_factory=dict)  # next-motion-only values, same keys
 
     def take(self, consume: bool = True) -> MotionParameters:
@@ -110,6 +120,7 @@ class MotionSettings:
             single=once.get("single", self.single),
             coarse=once.get("coarse", self.coarse),
             null=once.get("null", self.null),
+            overlap=once.get("overlap", self.overlap),
         )
 
     def set(self, key: str, value, always: bool) -> None:
@@ -283,7 +294,54 @@ class VirtualController:
                 self.settings.absolute_speed_mm_s = None
 
     def speed(self, select: int = 1) -> float:
-        return self.settings.monitor_speed if select == 0 else self.settings.program_speed
+        """SPEED(select) (V+ Language Reference, SPEED function; docs/motion.md): 1 the monitor
+        speed, 2 the permanent program speed (SPEED ... ALWAYS), 3 the program speed the next
+        motion will get (a SPEED without ALWAYS included)."""
+        if select == 1:
+            return self.settings.monitor_speed
+        if select == 2:
+            return self.settings.program_speed
+        if select == 3:
+            return self.settings.next.get("program_speed", self.settings.program_speed)
+        raise ProgramError(f"*Invalid argument* SPEED({select})", -407)
+
+    def configuration(self, select: int = 0) -> int:
+        """CONFIG(select): the arm configuration bits (1 RIGHTY, 2 BELOW, 4 FLIP) of the robot now
+        (0), of the destination of the last motion (1) or of the next motion (2, after
+        LEFTY/RIGHTY).  A SCARA has only the RIGHTY bit to show, a Cartesian robot none."""
+        if self.kin.scara is None:
+            return 0
+        if select == 0:
+            return CONFIG_RIGHTY if self.kin.is_righty(self.cell.robot_qpos()) else 0
+        if select == 1:
+            return CONFIG_RIGHTY if self.kin.is_righty(self._q_planned) else 0
+        if select == 2:
+            righty = self._righty_request
+            if righty is None:
+                righty = self.kin.is_righty(self._q_planned)
+            return CONFIG_RIGHTY if righty else 0
+        raise ProgramError(f"*Invalid argument* CONFIG({select})", -407)
+
+    def inrange(self, target) -> int:
+        """INRANGE(location): 0 when the next joint motion could reach `target` (a Location or
+        a precision point's joint values) from the last destination in the requested
+        configuration; otherwise the reasons as bits: joint n's limit 2^(n-1), too close to
+        the J1 axis, beyond reach, a tool orientation the robot cannot take (INRANGE_*)."""
+        try:
+            if isinstance(target, Location):
+                single = self.settings.take(consume=False).single
+                self.kin.ik(self._flange_matrix_m(target), self._q_planned, righty=self._righty_request, single=single)
+            else:
+                self.kin.check_limits(self.from_user_joints(target))
+        except KinematicsError as err:
+            if err.joint is not None:
+                return 1 << (err.joint - 1)
+            return _OUT_OF_RANGE_BITS.get(getattr(err, "detail", ""), INRANGE_TOO_FAR)
+        return 0
+
+    def set_payload(self, percent: float) -> None:
+        """PAYLOAD percent: the payload indication, % of the robot's maximum payload."""
+        self.settings.payload = float(percent)
 
     def set_accel(self, accel: float | None, decel: float | None) -> None:
         """ACCEL acc, dec: percentages of the maximum, at most 100 (the SPEC maximum)."""
@@ -341,6 +399,8 @@ class VirtualController:
                                                    tool=tool))
                 else:
                     q1 = self.kin.ik(self._flange_matrix_m(target), q0, righty=righty, single=params.single)
+                    if params.overlap:
+                        self._check_overlap(q0, q1)
                     trajectory = self._joint_trajectory(q0, q1, params)
                 destination = target
             else:
@@ -352,6 +412,18 @@ class VirtualController:
             raise ProgramError(err.message, err.code) from None
         yield from self._launch(_timed(trajectory, params), params, destination, cp,
                                 straight and isinstance(target, Location))
+
+    def _check_overlap(self, q0: np.ndarray, q1: np.ndarray) -> None:
+        """OVERLAP: a multi-turn joint (range over 360 deg) that would turn more than 180 deg,
+        which MULTIPLE does only to keep clear of a limit, is that joint's limit-stop error."""
+        multi_turn = self.kin.revolute & (self.kin.upper - self.kin.lower > 2 * math.pi)
+        over = np.nonzero(multi_turn & (np.abs(q1 - q0) > math.pi + 1e-9))[0]
+        if len(over):
+            raise KinematicsError.joint_limit(int(over[0]) + 1)
+
+    def ready_joints(self) -> tuple[float, ...]:
+        """READY's destination: the robot's READY joints (the model's `ready` numeric), V+ units."""
+        return self.to_user_joints(self.kin.ready)
 
     def drive(self, joint: int, change: float, speed: float, cp: bool = True):
         """DRIVE joint, change, speed: joint `joint` (1-based) by `change` (deg or mm) at

@@ -1,0 +1,397 @@
+"""The motion examples of the V+ Language User's Guide v17 ("Robot Motion" chapter; the eV+
+guide has the same examples), run on the SCARA demo cell (scenes/scara_pick.toml) with
+their locations moved within the Cobra's reach, and the motion keywords the chapter's
+tables list (INRANGE, CONFIG, SPEED(), READY, MOVET, OVERLAP, PAYLOAD, BRAKE from another
+task).  Line numbers are those of /work/shared/seeds/vplus-language-users-guide-v17.txt.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from test_motion_controller import DOWN, GANTRY, _program, run_on_cell
+
+from twin.controller.location import Location
+
+LOC_1 = Location(400.0, -150.0, 280.0, *DOWN)
+LOC_2 = Location(250.0, 250.0, 280.0, *DOWN)
+# From the cell's start pose through CP_1 to CP_2 every joint keeps its direction: the
+# corner at CP_1 can be blended (a joint that turns back cannot, docs/motion.md).
+CP_1 = Location(450.0, -50.0, 280.0, *DOWN)
+CP_2 = Location(510.0, 60.0, 270.0, *DOWN)
+
+
+def _flange(sim, q) -> np.ndarray:
+    """Flange position (mm, robot frame) for joints q."""
+    return sim.kinematics.fk(q)[:3, 3] * 1e3
+
+
+def _times_on(rows, signal: int) -> float:
+    return next(t for t, _, _, io, _ in rows if io.get(signal))
+
+
+def _tool_speeds(sim, rows) -> tuple[np.ndarray, np.ndarray]:
+    """Times and commanded flange speeds (mm/s) between probe rows."""
+    t = np.array([r[0] for r in rows])
+    p = np.array([_flange(sim, r[2]) for r in rows])
+    return t[1:], np.linalg.norm(np.diff(p, axis=0), axis=1) / np.diff(t)
+
+
+def _global(task, name: str):
+    return task.system.globals[name]
+
+
+# ---------------------------------------------------------------- forward processing
+def test_forward_processing_signals_turn_on_as_each_motion_begins():
+    """L6315-6324: MOVE part.1 / SIGNAL 1 / MOVE part.2 / SIGNAL 2.  Signal 1 turns on just
+    after the robot begins moving to part.1; the second MOVE waits for the motion to part.1;
+    signal 2 turns on just after the motion to part.2 begins, long before the robot gets
+    there."""
+    program = _program("SPEED 30 ALWAYS", "MOVE part.1", "SIGNAL 1", "MOVE part.2", "SIGNAL 2")
+    sim, _, outcome, rows = run_on_cell(program, locations={"part.1": LOC_1, "part.2": LOC_2})
+    assert outcome.errors == []
+    first, second = sim.controller.history
+    on1, on2 = _times_on(rows, 1), _times_on(rows, 2)
+    assert first.start_s <= on1 <= first.start_s + 0.033
+    assert on2 > first.end_s - first.duration_s / 2  # after the first motion neared its end
+    assert second.start_s - 0.033 <= on2 <= second.start_s + 0.033  # as the second one begins
+    assert on2 < second.end_s - 0.3
+    at_on2 = next(_flange(sim, q) for t, q, _, io, _ in rows if io.get(2))
+    assert np.linalg.norm(at_on2 - LOC_2.position()) > 200.0  # far from part.2
+
+
+def test_break_holds_the_signal_until_the_robot_has_stopped():
+    """L6436-6447: MOVE loc.1 / BREAK / SIGNAL 1: the signal is not turned on until the
+    robot stops at loc.1."""
+    sim, _, outcome, rows = run_on_cell(_program("MOVE loc.1", "BREAK", "SIGNAL 1"), locations={"loc.1": LOC_1})
+    assert outcome.errors == []
+    (move,) = sim.controller.history
+    on = _times_on(rows, 1)
+    assert on >= move.end_s
+    q_on = next(q for t, q, _, io, _ in rows if io.get(1))
+    assert np.linalg.norm(_flange(sim, q_on) - LOC_1.position()) < 0.05
+
+
+# ---------------------------------------------------------------- continuous path
+@pytest.mark.parametrize("cp", [True, False])
+def test_continuous_path_passes_loc_1_without_stopping_and_disable_cp_stops_there(cp):
+    """L6416-6440: with CP on, MOVE loc.1 / MOVE loc.2 does not stop at loc.1, the robot
+    "smoothly changes its direction"; with the CP switch disabled it stops at loc.1.  Either
+    way forward processing goes on: SIGNAL 1 turns on as the first motion begins."""
+    program = _program("ENABLE CP" if cp else "DISABLE CP", "MOVE loc.1", "SIGNAL 1", "MOVE loc.2", "BREAK")
+    sim, _, outcome, rows = run_on_cell(program, locations={"loc.1": CP_1, "loc.2": CP_2})
+    assert outcome.errors == []
+    first, second = sim.controller.history
+    assert _times_on(rows, 1) <= first.start_s + 0.033
+    closest = min(np.linalg.norm(_flange(sim, qc) - CP_1.position()) for _, _, qc, _, _ in rows)
+    if cp:
+        t, speed = _tool_speeds(sim, rows)
+        near_loc_1 = (t > first.end_s - 0.1) & (t < second.start_s + 0.1)
+        assert second.overlap_s > 0.05
+        assert speed[near_loc_1].min() > 100.0  # mm/s: it never stops at loc.1 ...
+        assert closest > 1.0  # ... and cuts the corner
+    else:
+        assert second.overlap_s == 0.0 and second.start_s >= first.end_s
+        assert closest < 1e-6  # commanded to loc.1 exactly, at rest
+
+
+# ---------------------------------------------------------------- procedural motion
+def test_procedural_motion_through_a_path_array_at_0_75_ips():
+    """L6491-6505: SPEED 0.75 IPS ALWAYS / FOR index = 0 TO LAST(path[]) / MOVES path[index]:
+    "The robot tool moves at the constant speed of 0.75 inch per second through each
+    location"; the path array is built with SHIFT (L6063-6070), 15 mm apart on a line."""
+    program = _program(
+        "FOR i = 0 TO 4", "SET path[i] = SHIFT(a BY 0, 15*i, 0)", "END",
+        "MOVE path[0]", "BREAK",
+        "SPEED 0.75 IPS ALWAYS",
+        "FOR index = 0 TO LAST(path[])", "MOVES path[index]", "END",
+        "BREAK")
+    sim, _, outcome, rows = run_on_cell(program, locations={"a": LOC_1}, max_time=12.0)
+    assert outcome.errors == []
+    legs = sim.controller.history[2:]  # MOVES path[0] (already there), then path[1..4]
+    assert len(legs) == 4
+    t, speed = _tool_speeds(sim, rows)
+    cruising = (t > legs[0].start_s + 0.3) & (t < legs[-1].end_s - 0.3)
+    assert np.median(speed[cruising]) == pytest.approx(0.75 * 25.4, rel=0.02)
+    assert speed[cruising].min() > 0.9 * 0.75 * 25.4  # no stop at the intermediate points
+    here = sim.controller.here().position()
+    assert np.linalg.norm(here - (LOC_1.position() + (0, 60, 0))) < 0.05
+
+
+def test_procedural_circular_arc_moves_angle_step_every_0_5_s():
+    """L6507-6530: the tool follows a computed arc, x = radius*COS(angle)+x.center,
+    y = radius*SIN(angle)+y.center, MOVE TRANS(x, y, z, 0, 180, 0), one segment per
+    angle.step, each lasting DURATION 0.5 s; the guide's "every 0.5 second" holds for the
+    segments' durations, the blends overlap them (docs/motion.md).  `DURATION 0.5 ALWAYS` needs a grammar rule the
+    parser does not have yet: DURATION 0.5 is given before each MOVE instead; z = 250
+    instead of 0 (the Cobra's reach); `last` is LAST, a function name and so a reserved
+    word (digest §15): the variable is `last.angle`."""
+    program = _program(
+        "radius = 60", "x.center = 350", "y.center = 0", "start = 0", "last.angle = 90", "angle.step = 15",
+        "MOVE TRANS(radius*COS(start)+x.center, radius*SIN(start)+y.center, 250, 0, 180, 0)", "BREAK",
+        "FOR angle = start TO last.angle STEP angle.step",
+        "x = radius*COS(angle)+x.center", "y = radius*SIN(angle)+y.center",
+        "DURATION 0.5", "MOVE TRANS(x, y, 250, 0, 180, 0)",
+        "END", "BREAK")
+    sim, _, outcome, rows = run_on_cell(program, max_time=12.0)
+    assert outcome.errors == []
+    arc = sim.controller.history[2:]  # after the move to the start and the one to angle 0
+    assert len(arc) == 6
+    assert all(m.duration_s >= 0.5 - 1e-9 for m in arc)
+    # Each segment lasts 0.5 s; with continuous path the next one starts as it decelerates,
+    # so a new angle.step begins every 0.5 s less the blend (docs/motion.md, DURATION).
+    for before, after in zip(arc, arc[1:]):
+        assert after.start_s == pytest.approx(before.start_s + before.duration_s - after.overlap_s, abs=0.003)
+        assert 0.1 < after.overlap_s < 0.3
+    for k, motion in enumerate(arc, start=1):
+        angle = math.radians(15 * k)
+        on_circle = (350 + 60 * math.cos(angle), 60 * math.sin(angle), 250.0)
+        assert np.allclose(motion.destination.position(), on_circle, atol=1e-6)
+    t, _ = _tool_speeds(sim, rows)
+    p = np.array([_flange(sim, r[2]) for r in rows])[1:]
+    on_arc = (t > arc[0].start_s) & (t < arc[-1].end_s)
+    radial = np.linalg.norm(p[on_arc, :2] - (350.0, 0.0), axis=1)
+    assert np.all(np.abs(radial - 60.0) < 3.0)  # joint moves between close points: near the arc
+    assert np.linalg.norm(sim.controller.here().position() - (350, 60, 250)) < 0.05
+
+
+# ---------------------------------------------------------------- locations
+def test_relative_transformations_example():
+    """L6134-6183 (the figure "Relative Transformation"), shifted by (0, -100, -70) mm to
+    the Cobra's reach: MOVE loc_a:TRANS(-50, 20, 30) goes to (350, -30, 250); loc_b =
+    -50, 20, 30, 0, 0, 0; loc_c = loc_a:loc_b; MOVE loc_c:loc_b, MOVE loc_a:loc_b:loc_d
+    with loc_d = TRANS(0,50) ("x = -50, y = 70, z = 30 relative to loc_a") and
+    MOVE loc_c:INVERSE(loc_b) back to loc_a.  `HERE loc_a:loc_b` (an instruction that
+    assigns) is written `SET loc_b = INVERSE(loc_a):HERE`, what it computes (digest §7.3):
+    the compiler has no HERE instruction yet."""
+    program = _program(
+        "SET loc_a = TRANS(300,-50,280,0,180,0)",
+        "MOVE loc_a", "BREAK", "SET h1 = HERE",
+        "MOVE loc_a:TRANS(-50, 20, 30)", "BREAK", "SET h2 = HERE",
+        "SET loc_b = INVERSE(loc_a):HERE",
+        "SET loc_c = loc_a:loc_b",
+        "MOVE loc_c:loc_b", "BREAK", "SET h3 = HERE",
+        "SET loc_d = TRANS(0,50)",
+        "MOVE loc_a:loc_b:loc_d", "BREAK", "SET h4 = HERE",
+        "MOVE loc_c:INVERSE(loc_b)", "BREAK", "SET h5 = HERE")
+    sim, task, outcome, _ = run_on_cell(program)
+    assert outcome.errors == []
+    expected = {"h1": (300, -50, 280), "h2": (350, -30, 250), "h3": (400, -10, 220),
+                "h4": (350, 20, 250), "h5": (300, -50, 280)}
+    for name, position in expected.items():
+        assert np.linalg.norm(_global(task, name).position() - position) < 0.05, name
+    assert np.allclose(_global(task, "loc_b").components(), (-50, 20, 30, 0, 0, 0), atol=0.05)
+    assert np.allclose(_global(task, "loc_c").components()[:5], (350, -30, 250, 0, 180), atol=0.05)
+
+
+def test_pallet_frame_example_visits_the_twelve_cells():
+    """L6200-6231: SET pallet.frame = FRAME(loc.origin, loc.x.axis, loc.pos.y, loc.origin),
+    cell.space = 50, FOR i = 0 TO 3 / FOR J = 0 TO 2: APPRO 25, MOVE, BREAK, CLOSEI,
+    DEPART 25.  The three taught points are given instead of taught with the pendant;
+    the pallet's +y runs along the robot's -y, so its Z points down, as the tool does."""
+    program = _program(
+        "SET pallet.frame = FRAME(loc.origin, loc.x.axis,loc.pos.y, loc.origin)",
+        "cell.space = 50",
+        "FOR i = 0 TO 3", "FOR J = 0 TO 2",
+        "APPRO pallet.frame:TRANS(i*cell.space, j*cell.space), 25",
+        "MOVE pallet.frame:TRANS(i*cell.space, j*cell.space)",
+        "BREAK", "CLOSEI", "DEPART 25",
+        "END", "END", "BREAK")
+    origin = Location(250.0, 40.0, 230.0, *DOWN)
+    sim, _, outcome, rows = run_on_cell(program, max_time=30.0, locations={
+        "loc.origin": origin, "loc.x.axis": origin.shifted(100, 0, 0), "loc.pos.y": origin.shifted(40, -80, 0)})
+    assert outcome.errors == []
+    at_rest = [_flange(sim, q) for t, q, _, _, moving in rows if not moving]
+    for i in range(4):
+        for j in range(3):
+            cell = np.array([250 + 50 * i, 40 - 50 * j, 230])
+            assert min(np.linalg.norm(p - cell) for p in at_rest) < 0.05, (i, j)
+    assert len(sim.controller.history) == 36
+    assert np.linalg.norm(sim.controller.here().position() - (400, -60, 255)) < 0.05
+
+
+def test_appro_move_depart_along_the_tool_z_axis():
+    """L6343-6361: APPRO place, 50 / MOVE place / DEPART 50: 50 mm back along the tool Z axis
+    (straight up for a tool pointing down), down to place, back up 50 mm."""
+    program = _program("APPRO place, 50", "MOVE place", "DEPART 50", "BREAK")
+    sim, _, outcome, rows = run_on_cell(program, locations={"place": LOC_1})
+    assert outcome.errors == []
+    appro, move, depart = sim.controller.history
+    above = LOC_1.position() + (0, 0, 50)
+    assert np.allclose(appro.destination.position(), above, atol=1e-6)
+    assert np.allclose(depart.destination.position(), above, atol=1e-6)
+    assert depart.overlap_s == 0.0 and depart.start_s >= move.end_s  # the quill turns back at place
+    closest = min(np.linalg.norm(_flange(sim, q) - LOC_1.position()) for _, q, _, _, _ in rows)
+    assert closest < 0.5  # measured, sampled every 16 ms
+    assert np.linalg.norm(sim.controller.here().position() - above) < 0.05
+
+
+def test_drive_moves_one_joint():
+    """L6378-6388: DRIVE 2,50.0,100 turns joint 2 by 50 degrees, DRIVE 3,25,100 lowers the
+    quill (joint 3) by 25 mm."""
+    sim, _, outcome, _ = run_on_cell(_program("MOVE #p", "DRIVE 2,50.0, 100", "DRIVE 3,25, 100", "BREAK"),
+                                     locations={"#p": (10.0, 30.0, 40.0, 0.0)})
+    assert outcome.errors == []
+    got = sim.controller.to_user_joints(sim.controller.joints())
+    assert np.allclose(got, (10.0, 80.0, 65.0, 0.0), atol=0.02)
+
+
+# ---------------------------------------------------------------- motion functions
+def test_inrange_and_speed_2_guard_a_move():
+    """L5394-5404: IF INRANGE(loc_1) == 0 THEN / IF SPEED(2) > 50 THEN SPEED 50 END /
+    MOVE(loc_1) / END: a reachable loc_1 is moved to at program speed 50 (not the 80 set
+    ALWAYS), an unreachable one is not moved to and is no error."""
+    guarded = ["SPEED 80 ALWAYS", "IF INRANGE(loc_1) == 0 THEN", "IF SPEED(2) > 50 THEN", "SPEED 50", "END",
+               "MOVE(loc_1)", "END", "BREAK"]
+    sim, _, outcome, _ = run_on_cell(_program(*guarded), locations={"loc_1": LOC_1})
+    assert outcome.errors == []
+    (move,) = sim.controller.history
+    assert np.linalg.norm(sim.controller.here().position() - LOC_1.position()) < 0.05
+    reference, _, _, _ = run_on_cell(_program("SPEED 50", "MOVE loc_1", "BREAK"), locations={"loc_1": LOC_1})
+    assert move.duration_s == pytest.approx(reference.controller.history[0].duration_s, rel=1e-6)
+    far = Location(700.0, 0.0, 250.0, *DOWN)
+    sim, _, outcome, _ = run_on_cell(_program(*guarded), locations={"loc_1": far})
+    assert outcome.errors == [] and sim.controller.history == []
+
+
+def test_inrange_says_why_a_location_cannot_be_reached():
+    """INRANGE(loc) (V+ guide v17 L6876): 0 when reachable, otherwise bits saying why
+    (docs/motion.md): joint n's limit 2^(n-1), too close 256, too far 512, a tilted tool
+    1024.  LEFTY asks for the other configuration, where J1's limit is in the way."""
+    program = _program(
+        "r1 = INRANGE(a)", "r2 = INRANGE(TRANS(700, 0, 250, 0, 180, 180))",
+        "r3 = INRANGE(TRANS(20, 0, 250, 0, 180, 180))", "r4 = INRANGE(TRANS(-300, -250, 250, 0, 180, 180))",
+        "r5 = INRANGE(TRANS(350, 0, 250, 0, 150, 180))", "r6 = INRANGE(#PPOINT(0, 160, 0, 0))",
+        "LEFTY", "r7 = INRANGE(TRANS(-100, 400, 250, 0, 180, 180))", "RIGHTY",
+        "r8 = INRANGE(TRANS(-100, 400, 250, 0, 180, 180))")
+    _, task, outcome, _ = run_on_cell(program, locations={"a": LOC_1})
+    assert outcome.errors == []
+    got = [_global(task, f"r{k}") for k in range(1, 9)]
+    assert got == [0, 512, 256, 1, 1024, 2, 1, 0]
+
+
+def test_config_reports_the_arm_configuration():
+    """CONFIG(select) (V+ guide v17 L6790): bit 1 set for RIGHTY, clear for LEFTY; 0 the
+    robot now, 1 the last destination, 2 the next motion (after LEFTY)."""
+    program = _program("MOVE a", "BREAK", "c0 = CONFIG(0)", "LEFTY", "c2 = CONFIG(2)", "MOVE a",
+                       "c1 = CONFIG(1)", "BREAK", "c3 = CONFIG(0)")
+    _, task, outcome, _ = run_on_cell(program, locations={"a": LOC_1})
+    assert outcome.errors == []
+    assert [_global(task, n) for n in ("c0", "c2", "c1", "c3")] == [1, 0, 0, 0]
+
+
+def test_speed_function_selectors():
+    """SPEED(select) (V+ guide v17 L5397-5402 uses SPEED(2) as the program speed): 1 the
+    monitor speed, 2 the permanent program speed, 3 the program speed of the next motion."""
+    program = _program("SPEED 40 MONITOR", "SPEED 70 ALWAYS", "SPEED 20",
+                       "s1 = SPEED(1)", "s2 = SPEED(2)", "s3 = SPEED(3)", "MOVE a", "s4 = SPEED(3)")
+    _, task, outcome, _ = run_on_cell(program, locations={"a": LOC_1})
+    assert outcome.errors == []
+    assert [_global(task, n) for n in ("s1", "s2", "s3", "s4")] == [40, 70, 20, 70]
+
+
+def test_tool_and_base_functions_return_the_settings():
+    """TOOL and BASE as functions (V+ guide v17 L6698-6722, E-V01 L286-295)."""
+    program = _program("TOOL TRANS(0, 0, 100)", "BASE ,,300", "SET t = TOOL", "SET b = BASE")
+    _, task, outcome, _ = run_on_cell(program)
+    assert outcome.errors == []
+    assert np.allclose(_global(task, "t").components(), (0, 0, 100, 0, 0, 0))
+    assert np.allclose(_global(task, "b").components(), (0, 0, 300, 0, 0, 0))
+
+
+# ---------------------------------------------------------------- motion instructions
+def test_movet_operates_the_hand_as_the_motion_starts(monkeypatch):
+    """MOVET loc, hand (V+ guide v17 L6918-6925): the move and the hand at once; a pneumatic
+    hand closes for an opening of 0 and opens for one above 0 (docs/motion.md)."""
+    from twin.physics.cell import Cell
+
+    commands = []
+    original = Cell.set_gripper
+
+    def recording(self, closed):
+        commands.append((self.time, bool(closed)))
+        original(self, closed)
+
+    monkeypatch.setattr(Cell, "set_gripper", recording)
+    program = _program("MOVET a, 0", "BREAK", "MOVEST b, 25", "BREAK")
+    sim, _, outcome, _ = run_on_cell(program, locations={"a": LOC_1, "b": LOC_1.shifted(0, 60, 0)})
+    assert outcome.errors == []
+    movet, movest = sim.controller.history
+    assert not movet.straight and movest.straight
+    (t_close, closed), (t_open, opened) = commands
+    assert closed and abs(t_close - movet.start_s) < 0.005
+    assert not opened and abs(t_open - movest.start_s) < 0.005
+
+
+def test_ready_moves_to_the_ready_location_in_the_standard_configuration():
+    """READY (V+ guide v17 L6986-6988): a move to the READY location above the workspace,
+    whatever configuration the robot was in (the Cobra: arm straight out, quill up)."""
+    program = _program("LEFTY", "MOVE a", "BREAK", "READY", "BREAK")
+    sim, _, outcome, _ = run_on_cell(program, locations={"a": LOC_1})
+    assert outcome.errors == []
+    assert np.allclose(sim.controller.to_user_joints(sim.controller.joints()), (0, 0, 0, 0), atol=0.02)
+    assert np.linalg.norm(sim.controller.here().position() - (600, 0, 341)) < 0.5
+
+
+def test_overlap_refuses_a_wrist_turn_of_more_than_180_degrees():
+    """OVERLAP (V+ guide v17 L6957-6960): a program error when a multi-turn axis would turn
+    more than 180 degrees to avoid a limit stop; NOOVERLAP (the start-up state here) lets
+    MULTIPLE take the long way round.  J4 at 350 deg, the target's nearest turn 380 deg is
+    past the +360 limit: MULTIPLE goes back to 20 deg."""
+    wrist_350 = (0.0, 60.0, 50.0, 350.0)
+    sim, _, _, _ = run_on_cell(_program("BREAK"))
+    target = sim.controller.location_of_joints((0.0, 60.0, 50.0, 20.0))
+
+    def run(modifier: str):
+        sim, _, outcome, _ = run_on_cell(_program("MOVE #p", "BREAK", modifier, "MOVE a", "BREAK"),
+                                         locations={"#p": wrist_350, "a": target})
+        return sim.controller.to_user_joints(sim.controller.joints())[3], outcome.errors
+
+    wrist, errors = run("NOOVERLAP")
+    assert errors == [] and wrist == pytest.approx(20.0, abs=0.05)
+    wrist, (error,) = run("OVERLAP")
+    assert (error["code"], error["message"], error["line"]) == (-1021, "*Joint 4 limit stop*", 5)
+    assert wrist == pytest.approx(350.0, abs=0.05)
+
+
+def test_payload_accepts_a_percentage():
+    """PAYLOAD (V+ guide v17 L6962): the payload indication, 0-100 % of the maximum payload;
+    anything else is *Illegal value* at the program line."""
+    sim, _, outcome, _ = run_on_cell(_program("PAYLOAD 40"))
+    assert outcome.errors == [] and sim.controller.settings.payload == 40.0
+    _, _, outcome, _ = run_on_cell(_program("PAYLOAD 40", "PAYLOAD 140"))
+    (error,) = outcome.errors
+    assert (error["code"], error["line"]) == (-402, 3)
+
+
+def test_brake_from_another_task_stops_the_robot_on_its_path():
+    """BRAKE "executed (by any program task)" stops the robot mid-segment (V+ guide v17
+    L6455-6461): task 1 brakes the motion task 0 started; task 0's BREAK then returns."""
+    text = _program("go = FALSE", "EXECUTE 1 braker()", "SPEED 20", "MOVE b", "go = TRUE", "BREAK",
+                    "SIGNAL 1") + ".PROGRAM braker()\n    WAIT go\n    BRAKE\n.END\n"
+    far = Location(300.0, 150.0, 250.0, *DOWN)
+    sim, _, outcome, rows = run_on_cell(text, locations={"b": far})
+    assert outcome.errors == []
+    (move,) = sim.controller.history
+    assert _times_on(rows, 1) < move.end_s - 0.3
+    here = sim.controller.here().position()
+    assert np.linalg.norm(here - far.position()) > 50.0
+    assert np.linalg.norm(sim.controller.destination().position() - here) < 0.05
+
+
+# ---------------------------------------------------------------- collisions
+def test_driving_the_gantry_into_the_belt_is_a_collision_error_at_the_program_line():
+    """A program that drives the gantry's gripper into the outfeed belt: *Collision
+    detected* (-1020) at the line the program was on, the robot halted on the belt, and
+    the program goes no further (docs/motion.md, "Collisions")."""
+    into_belt = Location(500.0, 650.0, 150.0, *DOWN)  # gantry frame: the belt is at x 500, y 430-1050
+    program = _program("MOVE a", "MOVE belt", "BREAK", "SIGNAL 1")
+    sim, _, outcome, rows = run_on_cell(program, scene=GANTRY, locations={"a": Location(500.0, 500.0, 300.0, *DOWN),
+                                                                          "belt": into_belt})
+    (error,) = outcome.errors
+    assert error["code"] == -1020 and error["message"].startswith("*Collision detected*")
+    assert error["line"] == 4 and "belt" in error["message"]
+    assert not any(io.get(1) for _, _, _, io, _ in rows)
+    assert sim.controller.here().z > into_belt.z + 20
