@@ -5,25 +5,13 @@ maximum payload (models/robots/cobra_s600.xml: 2 kg rated, 5.5 kg maximum)."""
 from __future__ import annotations
 
 import statistics
-import sys
-from pathlib import Path
 
 import pytest
+from test_motion_controller import ROOT, SCARA, cycle_time_bench
 
 from twin.runner import run_program
 
-ROOT = Path(__file__).resolve().parent.parent
-SCARA = ROOT / "scenes" / "scara_pick.toml"
 MOVE_PARTS = ROOT / "programs" / "vplus" / "move_parts.pg"
-
-
-def _bench():
-    sys.path.insert(0, str(ROOT / "bench"))
-    try:
-        import cycle_time
-    finally:
-        sys.path.pop(0)
-    return cycle_time
 
 
 def test_demo_cycle_at_full_monitor_speed_is_plausible_against_the_datasheet():
@@ -31,7 +19,7 @@ def test_demo_cycle_at_full_monitor_speed_is_plausible_against_the_datasheet():
     Adept cycle (0.54 s) plus the two HAND.TIME waits (2 x 0.16 s) it asks for, and at most
     35 % more (it moves 360 mm instead of 305, lifts 50.8 mm at the place and stops at both
     ends: bench/cycle_time.py --demo)."""
-    bench = _bench()
+    bench = cycle_time_bench()
     times = bench.demo_cycle_times(parts=5)
     assert max(times) - min(times) < 0.01  # the same cycle every part
     low, high = bench.DEMO_BAND

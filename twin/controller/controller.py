@@ -564,14 +564,17 @@ class VirtualController:
 
     def set_tool(self, tool: Location):
         """TOOL t: waits for the robot to stop, then locations refer to the new tool tip."""
-        yield from self.wait_stopped()
-        self.tool = tool
-        self._destination = self._location_of(self._q_planned)
+        yield from self._set_frame("tool", tool)
 
     def set_base(self, base: Location):
         """BASE: waits for the robot to stop, then the world frame is `base` in the robot frame."""
+        yield from self._set_frame("base", base)
+
+    def _set_frame(self, which: str, value: Location):
+        """TOOL and BASE break continuous path; DEST is then the robot's destination seen
+        through the new frame."""
         yield from self.wait_stopped()
-        self.base = base
+        setattr(self, which, value)
         self._destination = self._location_of(self._q_planned)
 
     def stop(self) -> None:
