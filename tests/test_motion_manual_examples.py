@@ -97,6 +97,22 @@ def test_continuous_path_passes_loc_1_without_stopping_and_disable_cp_stops_ther
         assert closest < 1e-6  # commanded to loc.1 exactly, at rest
 
 
+@pytest.mark.parametrize("always", [False, True])
+def test_motion_modifiers_apply_to_the_next_motion_or_with_always_to_all(always):
+    """"Motion Modifiers" (L6636-6660): COARSE/FINE, NULL/NONULL (marked *) take ALWAYS;
+    without it they apply to the next motion only.  NONULL: BREAK does not wait for the
+    position errors to be nulled, so the signal after it comes at once."""
+    modifier = "NONULL ALWAYS" if always else "NONULL"
+    program = _program("MOVE a", "BREAK", modifier, "MOVE b", "BREAK", "SIGNAL 1", "MOVE a", "BREAK",
+                       "SIGNAL 2")
+    sim, _, outcome, rows = run_on_cell(program, locations={"a": CP_1, "b": CP_2})
+    assert outcome.errors == []
+    _, to_b, back_to_a = sim.controller.history
+    assert _times_on(rows, 1) - to_b.end_s < 0.033  # no nulling wait after the NONULL motion
+    wait_at_a = _times_on(rows, 2) - back_to_a.end_s
+    assert (wait_at_a < 0.033) if always else (wait_at_a > 0.033)
+
+
 # ---------------------------------------------------------------- procedural motion
 def test_procedural_motion_through_a_path_array_at_0_75_ips():
     """L6491-6505: SPEED 0.75 IPS ALWAYS / FOR index = 0 TO LAST(path[]) / MOVES path[index]:
@@ -210,6 +226,29 @@ def test_pallet_frame_example_visits_the_twelve_cells():
             assert min(np.linalg.norm(p - cell) for p in at_rest) < 0.05, (i, j)
     assert len(sim.controller.history) == 36
     assert np.linalg.norm(sim.controller.here().position() - (400, -60, 255)) < 0.05
+
+
+def test_def_tool_computes_the_new_tool_from_a_reference_location():
+    """def.tool (L12424-12485), its tool arithmetic without the pendant: with the reference
+    tool (here the bare flange, as L12486-12491 recommend) the robot records ref.loc; the
+    new tool's tip is brought to ref.loc (here: a MOVE with the true tool, standing for the
+    operator's jogging); then SET new.tool = ref.tool:INVERSE(HERE):ref.loc gives the new
+    tool, and with TOOL new.tool, HERE reads ref.loc."""
+    program = _program(
+        "TOOL ref.tool", "MOVE ref.point", "BREAK", "SET ref.loc = HERE",
+        "TOOL true.tool", "MOVE ref.loc", "BREAK",
+        "TOOL ref.tool",
+        "SET new.tool = ref.tool:INVERSE(HERE):ref.loc",
+        "TOOL new.tool", "SET h = HERE")
+    true_tool = Location(12.0, -30.0, 95.0, 25.0, 0.0, 0.0)
+    reference = LOC_1.shifted(0, 0, -100)  # low enough for the flange to reach it with the tool
+    _, task, outcome, _ = run_on_cell(program, locations={
+        "ref.tool": Location(0, 0, 0, 0, 0, 0), "ref.point": reference, "true.tool": true_tool})
+    assert outcome.errors == []
+    new_tool = _global(task, "new.tool")
+    assert np.linalg.norm(new_tool.position() - true_tool.position()) < 0.05
+    assert np.allclose(new_tool.matrix()[:3, :3], true_tool.matrix()[:3, :3], atol=1e-3)
+    assert np.linalg.norm(_global(task, "h").position() - reference.position()) < 0.05
 
 
 def test_appro_move_depart_along_the_tool_z_axis():
@@ -328,11 +367,23 @@ def test_movet_operates_the_hand_as_the_motion_starts(monkeypatch):
 def test_ready_moves_to_the_ready_location_in_the_standard_configuration():
     """READY (V+ guide v17 L6986-6988): a move to the READY location above the workspace,
     whatever configuration the robot was in (the Cobra: arm straight out, quill up)."""
-    program = _program("LEFTY", "MOVE a", "BREAK", "READY", "BREAK")
-    sim, _, outcome, _ = run_on_cell(program, locations={"a": LOC_1})
+    program = _program("LEFTY", "MOVE a", "BREAK", "READY", "BREAK", "c = CONFIG(0)")
+    sim, task, outcome, _ = run_on_cell(program, locations={"a": LOC_1})
     assert outcome.errors == []
     assert np.allclose(sim.controller.to_user_joints(sim.controller.joints()), (0, 0, 0, 0), atol=0.02)
     assert np.linalg.norm(sim.controller.here().position() - (600, 0, 341)) < 0.5
+    assert _global(task, "c") == 1  # RIGHTY: the stretched arm
+
+
+def test_gantry_ready_config_and_inrange():
+    """The same keywords on the Cartesian robot: READY at mid-stroke with Z up, no arm
+    configuration (CONFIG 0), INRANGE 512 outside its box."""
+    program = _program("READY", "BREAK", "c = CONFIG(0)", "r1 = INRANGE(a)",
+                       "r2 = INRANGE(TRANS(900, 300, 250, 0, 180, 180))")
+    sim, task, outcome, _ = run_on_cell(program, scene=GANTRY, locations={"a": Location(500.0, 500.0, 300.0, *DOWN)})
+    assert outcome.errors == []
+    assert np.allclose(sim.controller.to_user_joints(sim.controller.joints()), (350, 400, 0, 0), atol=0.02)
+    assert [_global(task, n) for n in ("c", "r1", "r2")] == [0, 0, 512]
 
 
 def test_overlap_refuses_a_wrist_turn_of_more_than_180_degrees():
