@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 import pytest
-from test_motion_controller import DOWN, GANTRY, _program, run_on_cell
+from test_motion_controller import DOWN, GANTRY, ROOT, _program, run_on_cell
 
 from twin.controller.location import Location
 
@@ -275,6 +275,46 @@ def test_drive_moves_one_joint():
     assert outcome.errors == []
     got = sim.controller.to_user_joints(sim.controller.joints())
     assert np.allclose(got, (10.0, 80.0, 65.0, 0.0), atol=0.02)
+
+
+def test_sample_robot_program_moves_as_its_detailed_description_says(monkeypatch):
+    """move.parts, the "Sample Robot Program" (listing L12078-12114, "Detailed Description"
+    L12116-12257), with parts = 2 on the demo cell: OPEN acts during the MOVE start, the
+    robot RIGHTY; per part APPRO pick 25.4 mm above (joint), MOVES pick (straight line),
+    CLOSEI once the robot stands at pick and 160 ms before it goes on, DEPARTS 25.4; the
+    same at place with 50.8 mm and OPENI; then "All done. 2 parts processed"."""
+    from twin.physics.cell import Cell
+
+    hand = []
+    original = Cell.set_gripper
+
+    def recording(self, closed):
+        hand.append((self.time, bool(closed)))
+        original(self, closed)
+
+    monkeypatch.setattr(Cell, "set_gripper", recording)
+    text = (ROOT / "programs" / "vplus" / "move_parts.pg").read_text().replace("parts = 100", "parts = 2")
+    sim, task, outcome, rows = run_on_cell(text)
+    assert outcome.errors == []
+    assert task.system.console.output == "All done. 2 parts processed\n"
+    start, *cycle = sim.controller.history
+    assert hand[0] == (pytest.approx(start.start_s, abs=0.003), False)  # OPEN, as MOVE start begins
+    taught = sim.taught_locations()
+    up1, up2 = np.array([0, 0, 25.4]), np.array([0, 0, 50.8])
+    expected = [(False, taught["pick"].position() + up1), (True, taught["pick"].position()),
+                (True, taught["pick"].position() + up1), (False, taught["place"].position() + up2),
+                (True, taught["place"].position()), (True, taught["place"].position() + up2)] * 2
+    assert len(cycle) == len(expected)
+    for motion, (straight, position) in zip(cycle, expected):
+        assert motion.straight == straight
+        assert np.allclose(motion.destination.position(), position, atol=1e-6)
+    closes = [t for t, closed in hand if closed]
+    opens = [t for t, closed in hand[1:] if not closed]
+    for k in range(2):
+        _, at_pick, leave_pick, _, at_place, leave_place = cycle[6 * k:6 * k + 6]
+        assert at_pick.end_s <= closes[k] and closes[k] + 0.16 - 1e-9 <= leave_pick.start_s
+        assert at_place.end_s <= opens[k] and opens[k] + 0.16 - 1e-9 <= leave_place.start_s
+    assert all(sim.kinematics.is_righty(q) for _, q, _, _, _ in rows)
 
 
 # ---------------------------------------------------------------- motion functions
