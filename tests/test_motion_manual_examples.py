@@ -173,6 +173,18 @@ def test_procedural_circular_arc_moves_angle_step_every_0_5_s():
     assert np.linalg.norm(sim.controller.here().position() - (350, 60, 250)) < 0.05
 
 
+def test_a_motion_takes_at_least_one_trajectory_cycle():
+    """"The minimum motion times ... must be greater than or equal to the configured
+    trajectory cycle time" (16 ms at 62.5 Hz, L6541-6553): a 0.05 mm move, which the robot
+    could make in a few ms, takes one cycle; so do the segments of a loop of such moves."""
+    program = _program("MOVE a", "BREAK", "FOR i = 1 TO 5", "MOVES SHIFT(a BY 0.05*i, 0, 0)", "END", "BREAK")
+    sim, _, outcome, _ = run_on_cell(program, locations={"a": LOC_1})
+    assert outcome.errors == []
+    steps = sim.controller.history[1:]
+    assert len(steps) == 5 and all(m.duration_s == pytest.approx(0.016) for m in steps)
+    assert np.linalg.norm(sim.controller.here().position() - LOC_1.shifted(0.25, 0, 0).position()) < 0.05
+
+
 # ---------------------------------------------------------------- locations
 def test_relative_transformations_example():
     """L6134-6183 (the figure "Relative Transformation"), shifted by (0, -100, -70) mm to

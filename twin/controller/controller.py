@@ -640,8 +640,10 @@ class VirtualController:
 
 
 def _timed(trajectory: Trajectory, params: MotionParameters) -> Trajectory:
-    """The planned motion slowed by the monitor speed, and to DURATION if that is longer."""
-    return trajectory.stretched(max(trajectory.duration * params.time_scale, params.duration_s))
+    """The planned motion slowed by the monitor speed, to DURATION if that is longer, and to
+    at least one trajectory cycle, the minimum motion time (V+ guide v17 L6548-6553; a
+    motion that goes nowhere stays empty)."""
+    return trajectory.stretched(max(trajectory.duration * params.time_scale, params.duration_s, TRAJECTORY_CYCLE_S))
 
 
 class _Still(Trajectory):
