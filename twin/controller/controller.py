@@ -309,18 +309,14 @@ class VirtualController:
         """CONFIG(select): the arm configuration bits (1 RIGHTY, 2 BELOW, 4 FLIP) of the robot now
         (0), of the destination of the last motion (1) or of the next motion (2, after
         LEFTY/RIGHTY).  A SCARA has only the RIGHTY bit to show, a Cartesian robot none."""
+        if select not in (0, 1, 2):
+            raise ProgramError(f"*Invalid argument* CONFIG({select})", -407)
         if self.kin.scara is None:
             return 0
-        if select == 0:
-            return CONFIG_RIGHTY if self.kin.is_righty(self.cell.robot_qpos()) else 0
-        if select == 1:
-            return CONFIG_RIGHTY if self.kin.is_righty(self._q_planned) else 0
-        if select == 2:
-            righty = self._righty_request
-            if righty is None:
-                righty = self.kin.is_righty(self._q_planned)
-            return CONFIG_RIGHTY if righty else 0
-        raise ProgramError(f"*Invalid argument* CONFIG({select})", -407)
+        righty = self._righty_request if select == 2 else None
+        if righty is None:
+            righty = self.kin.is_righty(self.cell.robot_qpos() if select == 0 else self._q_planned)
+        return CONFIG_RIGHTY if righty else 0
 
     def inrange(self, target) -> int:
         """INRANGE(location): 0 when the next joint motion could reach `target` (a Location or

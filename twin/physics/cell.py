@@ -364,11 +364,6 @@ class Cell:
             self._grasp_until = -1.0
         self._closed = closed
 
-    @property
-    def gripper_closed(self) -> bool:
-        """Whether the jaws are commanded closed."""
-        return self._closed
-
     def gripper_holding(self) -> int | None:
         """Index of the part held by a weld, or None."""
         return self._held

@@ -3,8 +3,8 @@
 Locations are transformations (`Location`) or precision points (tuples of joint values,
 degrees and mm).  The CP switch (ENABLE/DISABLE CP) is read when a motion is issued.
 Modifiers that take ALWAYS here are written with it as a keyword name (`CPOFF ALWAYS`,
-`SINGLE ALWAYS`, `OVERLAP ALWAYS`); `DURATION t ALWAYS` needs a grammar rule that does not exist yet, so
-DURATION applies to the next motion only (docs/motion.md).
+`SINGLE ALWAYS`, `OVERLAP ALWAYS`); `DURATION t ALWAYS` needs a grammar rule that does
+not exist yet, so DURATION applies to the next motion only (docs/motion.md).
 """
 
 from __future__ import annotations
