@@ -240,6 +240,38 @@ def test_pallet_frame_example_visits_the_twelve_cells():
     assert np.linalg.norm(sim.controller.here().position() - (400, -60, 255)) < 0.05
 
 
+def test_locations_taught_relative_to_an_assembly_frame_follow_the_frame():
+    """L6236-6278: locations recorded relative to assm.frame (HERE assm.frame:loc.1) are
+    visited at the same place on the assembly wherever the frame is taught next ("the frame
+    must be taught each time the assembly moves - the locations on the assembly must be
+    taught only once").  HERE assm.frame:loc.n is written SET loc.n = INVERSE(assm.frame):HERE
+    (no HERE instruction yet); the moves are as printed, the second APPRO to loc.1 included."""
+    teach = ["SET assm.frame = FRAME(o1, x1, y1, o1)",
+             "MOVE p1", "BREAK", "SET loc.1 = INVERSE(assm.frame):HERE",
+             "MOVE p2", "BREAK", "SET loc.2 = INVERSE(assm.frame):HERE"]
+    visit = ["SET assm.frame = FRAME(o2, x2, y2, o2)",
+             "APPRO assm.frame:loc.1, 25", "MOVE assm.frame:loc.1", "BREAK", "SET h1 = HERE", "DEPART 25",
+             "APPRO assm.frame:loc.1, 25", "MOVE assm.frame:loc.2", "BREAK", "SET h2 = HERE", "DEPART 25", "BREAK"]
+    o1 = Location(300.0, -100.0, 230.0, *DOWN)
+    o2 = Location(350.0, -40.0, 230.0, *DOWN)  # the assembly moved 50, 60 mm and turned 30 deg
+    turn = math.radians(30.0)
+    x2 = o2.shifted(100 * math.cos(turn), 100 * math.sin(turn), 0)
+    y2 = o2.shifted(100 * math.sin(turn), -100 * math.cos(turn), 0)  # the frame's +Y: Z down
+    p1, p2 = o1.shifted(40, -20, 0), o1.shifted(80, -50, -10)
+    _, task, outcome, _ = run_on_cell(_program(*teach, *visit), locations={
+        "o1": o1, "x1": o1.shifted(100, 0, 0), "y1": o1.shifted(0, -100, 0), "p1": p1, "p2": p2,
+        "o2": o2, "x2": x2, "y2": y2})
+    assert outcome.errors == []
+
+    def on_moved_assembly(p: Location) -> np.ndarray:  # p1, p2 carried along with the frame
+        dx, dy = p.x - o1.x, -(p.y - o1.y)  # in the first frame (its +Y is the robot's -Y)
+        return np.array([o2.x + dx * math.cos(turn) + dy * math.sin(turn),
+                         o2.y + dx * math.sin(turn) - dy * math.cos(turn), p.z])
+
+    assert np.linalg.norm(_global(task, "h1").position() - on_moved_assembly(p1)) < 0.05
+    assert np.linalg.norm(_global(task, "h2").position() - on_moved_assembly(p2)) < 0.05
+
+
 def test_def_tool_computes_the_new_tool_from_a_reference_location():
     """def.tool (L12424-12485), its tool arithmetic without the pendant: with the reference
     tool (here the bare flange, as L12486-12491 recommend) the robot records ref.loc; the
