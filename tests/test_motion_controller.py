@@ -239,6 +239,35 @@ def test_tool_transformation_moves_the_tool_tip_to_the_location():
     assert np.allclose(here.position(), low.position(), atol=0.05)
 
 
+def test_duration_lowers_the_speed_and_keeps_the_accelerations(monkeypatch):
+    """DURATION slows a motion down as a lower speed would ("the motion is slowed", V+
+    Language Reference, DURATION): it lasts the given time, and its joints accelerate as
+    hard as without DURATION (a uniform slow-down of a 0.3 s motion to 1.5 s would cut the
+    accelerations 25-fold)."""
+    from twin.physics.cell import Cell
+
+    samples = []
+    original = Cell.set_servo
+
+    def recording(self, q, qd, qdd=None):
+        if qdd is not None:  # the largest acceleration, as a fraction of the joint's maximum
+            samples.append((self.time, float(np.max(np.abs(qdd) / self.kinematics.max_acceleration))))
+        original(self, q, qd, qdd)
+
+    monkeypatch.setattr(Cell, "set_servo", recording)
+    durations, peaks = [], []
+    for prefix in ([], ["DURATION 1.5"]):
+        samples.clear()
+        sim, _, outcome, _ = run_on_cell(_program("MOVE a", "BREAK", *prefix, "MOVE b", "BREAK"),
+                                         locations={"a": A, "b": B})
+        assert outcome.errors == []
+        move = sim.controller.history[1]
+        durations.append(move.duration_s)
+        peaks.append(max(ratio for t, ratio in samples if move.start_s <= t <= move.end_s))
+    assert durations[0] < 0.5 and durations[1] == pytest.approx(1.5)
+    assert peaks[1] == pytest.approx(peaks[0], rel=0.1) and peaks[0] > 0.9
+
+
 def test_precision_point_and_drive_move_the_joints():
     """Precision points hold joint values in degrees and mm (V+ guide v17 L5944-5946);
     DRIVE 2, 10, 50 turns joint 2 by 10 degrees (V+ guide v17 L6380-6388)."""

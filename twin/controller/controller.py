@@ -46,6 +46,7 @@ BLEND_SLACK = 1.02  # blends may reach the joint limits within the planner's own
 COARSE_FACTOR = 5.0  # COARSE tolerance / FINE tolerance (SPEC: "normally 2 to 10 times" FINE)
 TRAJECTORY_CYCLE_S = 0.016  # V+ trajectory generator period (62.5 Hz, V+ guide v17 "Timing Considerations")
 PLAN_CACHE = 64  # planned trajectories kept for reuse
+DURATION_BISECTIONS = 12  # speed factor for DURATION to 1/4096: the last 0.1 % is a uniform stretch
 MM = 1000.0
 MM_PER_INCH = 25.4
 CONFIG_RIGHTY = 1  # CONFIG() bits: RIGHTY (else LEFTY); BELOW = 2 and FLIP = 4 never apply here
@@ -386,13 +387,14 @@ class VirtualController:
             if isinstance(target, Location):
                 if straight:
                     tip, tool = self._tip_matrix_m(target), self._tool_m()
-                    trajectory = self._cached(
+                    trajectory = self._as_run(
                         ("S", q0.tobytes(), tip.tobytes(), tool.tobytes(), righty, params.cartesian_speed_m_s,
                          params.accel, params.decel),
-                        lambda: plan_straight_move(self.kin, q0, tip, self.kin.max_velocity,
-                                                   self.kin.max_acceleration, params.cartesian_speed_m_s,
-                                                   righty=righty, accel=params.accel, decel=params.decel,
-                                                   tool=tool))
+                        lambda f: plan_straight_move(self.kin, q0, tip, self.kin.max_velocity,
+                                                     self.kin.max_acceleration, params.cartesian_speed_m_s * f,
+                                                     righty=righty, accel=params.accel, decel=params.decel,
+                                                     tool=tool),
+                        params)
                 else:
                     q1 = self.kin.ik(self._flange_matrix_m(target), q0, righty=righty, single=params.single)
                     if params.overlap:
@@ -406,8 +408,7 @@ class VirtualController:
                 destination = self._location_of(q1)
         except KinematicsError as err:
             raise ProgramError(err.message, err.code) from None
-        yield from self._launch(_timed(trajectory, params), params, destination, cp,
-                                straight and isinstance(target, Location))
+        yield from self._launch(trajectory, params, destination, cp, straight and isinstance(target, Location))
 
     def _check_overlap(self, q0: np.ndarray, q1: np.ndarray) -> None:
         """OVERLAP: a multi-turn joint (range over 360 deg) that would turn more than 180 deg,
@@ -437,13 +438,29 @@ class VirtualController:
         except KinematicsError as err:
             raise ProgramError(err.message, err.code) from None
         trajectory = self._joint_trajectory(self._q_planned, q1, params)
-        yield from self._launch(_timed(trajectory, params), params, self._location_of(q1), cp)
+        yield from self._launch(trajectory, params, self._location_of(q1), cp)
 
     def _joint_trajectory(self, q0, q1, params: MotionParameters) -> Trajectory:
-        return self._cached(
+        return self._as_run(
             ("J", q0.tobytes(), q1.tobytes(), params.joint_speed, params.accel, params.decel),
-            lambda: plan_joint_move(q0, q1, self.kin.max_velocity * params.joint_speed,
-                                    self.kin.max_acceleration, accel=params.accel, decel=params.decel))
+            lambda f: plan_joint_move(q0, q1, self.kin.max_velocity * params.joint_speed * f,
+                                      self.kin.max_acceleration, accel=params.accel, decel=params.decel),
+            params)
+
+    def _as_run(self, key: tuple, plan, params: MotionParameters) -> Trajectory:
+        """The motion as it will run.  `plan(f)` plans it at f times the program speed.  The
+        monitor speed slows the planned motion down uniformly (see MotionSettings).  A motion
+        that would take less than DURATION is replanned at the lower speed that makes it last
+        that long, accelerations unchanged, as a lower SPEED would be ("the motion is
+        slowed", V+ Language Reference, DURATION): its acceleration and deceleration stay
+        short, and so do its blends with its neighbours.  Every motion lasts at least one
+        trajectory cycle, the minimum motion time (V+ guide v17 L6548-6553; a motion that
+        goes nowhere stays empty)."""
+        trajectory = self._cached(key, lambda: plan(1.0))
+        planned_duration = params.duration_s / params.time_scale
+        if 0.0 < trajectory.duration < planned_duration:
+            trajectory = self._cached(key + (planned_duration,), lambda: _slowed_down(plan, planned_duration))
+        return trajectory.stretched(max(trajectory.duration * params.time_scale, params.duration_s, TRAJECTORY_CYCLE_S))
 
     def _cached(self, key: tuple, plan) -> Trajectory:
         """A cyclic program asks for the same motions, from the same joints, over and over:
@@ -635,11 +652,17 @@ class VirtualController:
         self.cell.set_gripper(closed=(state == "close"))
 
 
-def _timed(trajectory: Trajectory, params: MotionParameters) -> Trajectory:
-    """The planned motion slowed by the monitor speed, to DURATION if that is longer, and to
-    at least one trajectory cycle, the minimum motion time (V+ guide v17 L6548-6553; a
-    motion that goes nowhere stays empty)."""
-    return trajectory.stretched(max(trajectory.duration * params.time_scale, params.duration_s, TRAJECTORY_CYCLE_S))
+def _slowed_down(plan, seconds: float) -> Trajectory:
+    """plan(f) for the speed factor f in (0, 1] at which the motion takes just under
+    `seconds` (bisection: a slower motion takes longer); the caller stretches the rest."""
+    slow, fast = 0.0, 1.0
+    for _ in range(DURATION_BISECTIONS):
+        middle = 0.5 * (slow + fast)
+        if plan(middle).duration >= seconds:
+            slow = middle
+        else:
+            fast = middle
+    return plan(fast)
 
 
 class _Still(Trajectory):
