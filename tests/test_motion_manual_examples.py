@@ -14,6 +14,7 @@ import pytest
 from test_motion_controller import DOWN, GANTRY, ROOT, _program, run_on_cell
 
 from twin.controller.location import Location
+from twin.physics.cell import Cell
 
 LOC_1 = Location(400.0, -150.0, 280.0, *DOWN)
 LOC_2 = Location(250.0, 250.0, 280.0, *DOWN)
@@ -41,6 +42,26 @@ def _tool_speeds(sim, rows) -> tuple[np.ndarray, np.ndarray]:
 
 def _global(task, name: str):
     return task.system.globals[name]
+
+
+def _values_after(program: str, names: tuple[str, ...], **run) -> list:
+    """The globals `names` after `program` ran on a cell without an error."""
+    _, task, outcome, _ = run_on_cell(program, **run)
+    assert outcome.errors == []
+    return [_global(task, name) for name in names]
+
+
+def _hand_commands(monkeypatch) -> list[tuple[float, bool]]:
+    """(simulated time, closed) of every command to the gripper valves from now on."""
+    commands = []
+    original = Cell.set_gripper
+
+    def recording(self, closed):
+        commands.append((self.time, bool(closed)))
+        original(self, closed)
+
+    monkeypatch.setattr(Cell, "set_gripper", recording)
+    return commands
 
 
 # ---------------------------------------------------------------- forward processing
@@ -326,16 +347,7 @@ def test_sample_robot_program_moves_as_its_detailed_description_says(monkeypatch
     robot RIGHTY; per part APPRO pick 25.4 mm above (joint), MOVES pick (straight line),
     CLOSEI once the robot stands at pick and 160 ms before it goes on, DEPARTS 25.4; the
     same at place with 50.8 mm and OPENI; then "All done. 2 parts processed"."""
-    from twin.physics.cell import Cell
-
-    hand = []
-    original = Cell.set_gripper
-
-    def recording(self, closed):
-        hand.append((self.time, bool(closed)))
-        original(self, closed)
-
-    monkeypatch.setattr(Cell, "set_gripper", recording)
+    hand = _hand_commands(monkeypatch)
     text = (ROOT / "programs" / "vplus" / "move_parts.pg").read_text().replace("parts = 100", "parts = 2")
     sim, task, outcome, rows = run_on_cell(text)
     assert outcome.errors == []
@@ -388,9 +400,7 @@ def test_inrange_says_why_a_location_cannot_be_reached():
         "r5 = INRANGE(TRANS(350, 0, 250, 0, 150, 180))", "r6 = INRANGE(#PPOINT(0, 160, 0, 0))",
         "LEFTY", "r7 = INRANGE(TRANS(-100, 400, 250, 0, 180, 180))", "RIGHTY",
         "r8 = INRANGE(TRANS(-100, 400, 250, 0, 180, 180))")
-    _, task, outcome, _ = run_on_cell(program, locations={"a": LOC_1})
-    assert outcome.errors == []
-    got = [_global(task, f"r{k}") for k in range(1, 9)]
+    got = _values_after(program, tuple(f"r{k}" for k in range(1, 9)), locations={"a": LOC_1})
     assert got == [0, 512, 256, 1, 1024, 2, 1, 0]
 
 
@@ -399,9 +409,7 @@ def test_config_reports_the_arm_configuration():
     robot now, 1 the last destination, 2 the next motion (after LEFTY)."""
     program = _program("MOVE a", "BREAK", "c0 = CONFIG(0)", "LEFTY", "c2 = CONFIG(2)", "MOVE a",
                        "c1 = CONFIG(1)", "BREAK", "c3 = CONFIG(0)")
-    _, task, outcome, _ = run_on_cell(program, locations={"a": LOC_1})
-    assert outcome.errors == []
-    assert [_global(task, n) for n in ("c0", "c2", "c1", "c3")] == [1, 0, 0, 0]
+    assert _values_after(program, ("c0", "c2", "c1", "c3"), locations={"a": LOC_1}) == [1, 0, 0, 0]
 
 
 def test_speed_function_selectors():
@@ -409,34 +417,22 @@ def test_speed_function_selectors():
     monitor speed, 2 the permanent program speed, 3 the program speed of the next motion."""
     program = _program("SPEED 40 MONITOR", "SPEED 70 ALWAYS", "SPEED 20",
                        "s1 = SPEED(1)", "s2 = SPEED(2)", "s3 = SPEED(3)", "MOVE a", "s4 = SPEED(3)")
-    _, task, outcome, _ = run_on_cell(program, locations={"a": LOC_1})
-    assert outcome.errors == []
-    assert [_global(task, n) for n in ("s1", "s2", "s3", "s4")] == [40, 70, 20, 70]
+    assert _values_after(program, ("s1", "s2", "s3", "s4"), locations={"a": LOC_1}) == [40, 70, 20, 70]
 
 
 def test_tool_and_base_functions_return_the_settings():
     """TOOL and BASE as functions (V+ guide v17 L6698-6722, E-V01 L286-295)."""
     program = _program("TOOL TRANS(0, 0, 100)", "BASE ,,300", "SET t = TOOL", "SET b = BASE")
-    _, task, outcome, _ = run_on_cell(program)
-    assert outcome.errors == []
-    assert np.allclose(_global(task, "t").components(), (0, 0, 100, 0, 0, 0))
-    assert np.allclose(_global(task, "b").components(), (0, 0, 300, 0, 0, 0))
+    tool, base = _values_after(program, ("t", "b"))
+    assert np.allclose(tool.components(), (0, 0, 100, 0, 0, 0))
+    assert np.allclose(base.components(), (0, 0, 300, 0, 0, 0))
 
 
 # ---------------------------------------------------------------- motion instructions
 def test_movet_operates_the_hand_as_the_motion_starts(monkeypatch):
     """MOVET loc, hand (V+ guide v17 L6918-6925): the move and the hand at once; a pneumatic
     hand closes for an opening of 0 and opens for one above 0 (docs/motion.md)."""
-    from twin.physics.cell import Cell
-
-    commands = []
-    original = Cell.set_gripper
-
-    def recording(self, closed):
-        commands.append((self.time, bool(closed)))
-        original(self, closed)
-
-    monkeypatch.setattr(Cell, "set_gripper", recording)
+    commands = _hand_commands(monkeypatch)
     program = _program("MOVET a, 0", "BREAK", "MOVEST b, 25", "BREAK")
     sim, _, outcome, _ = run_on_cell(program, locations={"a": LOC_1, "b": LOC_1.shifted(0, 60, 0)})
     assert outcome.errors == []
