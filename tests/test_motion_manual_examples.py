@@ -494,6 +494,11 @@ def test_payload_accepts_a_percentage():
     _, _, outcome, _ = run_on_cell(_program("PAYLOAD 40", "PAYLOAD 140"))
     (error,) = outcome.errors
     assert (error["code"], error["line"]) == (-402, 3)
+    # Like ACCEL and DURATION, a robot setting: a task without the robot may not change it.
+    other_task = _program("EXECUTE 1 other()") + ".PROGRAM other()\n    PAYLOAD 30\n.END\n"
+    sim, _, outcome, _ = run_on_cell(other_task)
+    (error,) = outcome.errors
+    assert (error["code"], error["program"]) == (-601, "other") and sim.controller.settings.payload == 0.0
 
 
 def test_brake_from_another_task_stops_the_robot_on_its_path():

@@ -336,10 +336,6 @@ class VirtualController:
             return _OUT_OF_RANGE_BITS.get(getattr(err, "detail", ""), INRANGE_TOO_FAR)
         return 0
 
-    def set_payload(self, percent: float) -> None:
-        """PAYLOAD percent: the payload indication, % of the robot's maximum payload."""
-        self.settings.payload = float(percent)
-
     def set_accel(self, accel: float | None, decel: float | None) -> None:
         """ACCEL acc, dec: percentages of the maximum, at most 100 (the SPEC maximum)."""
         if accel is not None:
@@ -350,9 +346,10 @@ class VirtualController:
     def set_duration(self, seconds: float, always: bool = False) -> None:
         self.settings.set("duration_s", max(float(seconds), 0.0), always)
 
-    def set_modifier(self, key: str, value: bool, always: bool = False) -> None:
+    def set_modifier(self, key: str, value, always: bool = False) -> None:
         """SINGLE/MULTIPLE ("single"), COARSE/FINE ("coarse"), NULL/NONULL ("null"),
-        CPON/CPOFF ("cp"): the next motion, or every motion with ALWAYS."""
+        OVERLAP/NOOVERLAP ("overlap"), CPON/CPOFF ("cp"): the next motion, or every motion
+        with ALWAYS; PAYLOAD ("payload", always)."""
         self.settings.set(key, value, always)
 
     def request_configuration(self, righty: bool) -> None:

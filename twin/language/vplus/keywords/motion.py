@@ -182,7 +182,7 @@ def _payload(rt, percent):
     only: the twin's servos use the model's real masses (docs/motion.md)."""
     if not 0.0 <= float(percent) <= 100.0:
         raise fail(msg.ILLEGAL_VALUE, f"PAYLOAD {percent}")
-    rt.robot.set_payload(float(percent))
+    rt.robot.set_modifier("payload", float(percent), always=True)
 
 
 @instruction("RIGHTY")
