@@ -46,8 +46,16 @@ BLEND_SLACK = 1.02  # blends may reach the joint limits within the planner's own
 COARSE_FACTOR = 5.0  # COARSE tolerance / FINE tolerance (SPEC: "normally 2 to 10 times" FINE)
 TRAJECTORY_CYCLE_S = 0.016  # V+ trajectory generator period (62.5 Hz, V+ guide v17 "Timing Considerations")
 PLAN_CACHE = 64  # planned trajectories kept for reuse
+DURATION_BISECTIONS = 12  # speed factor for DURATION to 1/4096: the last 0.1 % is a uniform stretch
 MM = 1000.0
 MM_PER_INCH = 25.4
+CONFIG_RIGHTY = 1  # CONFIG() bits: RIGHTY (else LEFTY); BELOW = 2 and FLIP = 4 never apply here
+# INRANGE() bits besides a joint limit (joint n: 2^(n-1)); twin-defined (docs/motion.md).
+INRANGE_TOO_CLOSE = 0x100
+INRANGE_TOO_FAR = 0x200
+INRANGE_ORIENTATION = 0x400
+_OUT_OF_RANGE_BITS = {"too close to the J1 axis": INRANGE_TOO_CLOSE, "beyond the reach of the arm": INRANGE_TOO_FAR,
+                      "no converged solution": INRANGE_TOO_FAR, "tool not vertical": INRANGE_ORIENTATION}
 
 
 @dataclass
@@ -64,6 +72,7 @@ class MotionParameters:
     single: bool  # wrist within +/-180 deg (SINGLE)
     coarse: bool  # COARSE: the looser end-of-motion tolerance
     null: bool  # NULL: a stop waits for the position errors to be nulled
+    overlap: bool  # OVERLAP: a multi-turn joint may not turn more than 180 deg to avoid a limit
 
 
 @dataclass
@@ -87,6 +96,8 @@ class MotionSettings:
     single: bool = False  # SINGLE / MULTIPLE ALWAYS
     coarse: bool = False  # COARSE / FINE ALWAYS
     null: bool = True  # NULL / NONULL ALWAYS
+    overlap: bool = False  # OVERLAP / NOOVERLAP ALWAYS (docs/motion.md: NOOVERLAP at start-up)
+    payload: float = 0.0  # PAYLOAD, % of the maximum payload (recorded: see docs/motion.md)
     next: dict = field(default_factory=dict)  # next-motion-only values, same keys
 
     def take(self, consume: bool = True) -> MotionParameters:
@@ -110,6 +121,7 @@ class MotionSettings:
             single=once.get("single", self.single),
             coarse=once.get("coarse", self.coarse),
             null=once.get("null", self.null),
+            overlap=once.get("overlap", self.overlap),
         )
 
     def set(self, key: str, value, always: bool) -> None:
@@ -283,7 +295,46 @@ class VirtualController:
                 self.settings.absolute_speed_mm_s = None
 
     def speed(self, select: int = 1) -> float:
-        return self.settings.monitor_speed if select == 0 else self.settings.program_speed
+        """SPEED(select) (V+ Language Reference, SPEED function; docs/motion.md): 1 the monitor
+        speed, 2 the permanent program speed (SPEED ... ALWAYS), 3 the program speed the next
+        motion will get (a SPEED without ALWAYS included)."""
+        if select == 1:
+            return self.settings.monitor_speed
+        if select == 2:
+            return self.settings.program_speed
+        if select == 3:
+            return self.settings.next.get("program_speed", self.settings.program_speed)
+        raise ProgramError(f"*Invalid argument* SPEED({select})", -407)
+
+    def configuration(self, select: int = 0) -> int:
+        """CONFIG(select): the arm configuration bits (1 RIGHTY, 2 BELOW, 4 FLIP) of the robot now
+        (0), of the destination of the last motion (1) or of the next motion (2, after
+        LEFTY/RIGHTY).  A SCARA has only the RIGHTY bit to show, a Cartesian robot none."""
+        if select not in (0, 1, 2):
+            raise ProgramError(f"*Invalid argument* CONFIG({select})", -407)
+        if self.kin.scara is None:
+            return 0
+        righty = self._righty_request if select == 2 else None
+        if righty is None:
+            righty = self.kin.is_righty(self.cell.robot_qpos() if select == 0 else self._q_planned)
+        return CONFIG_RIGHTY if righty else 0
+
+    def inrange(self, target) -> int:
+        """INRANGE(location): 0 when the next joint motion could reach `target` (a Location or
+        a precision point's joint values) from the last destination in the requested
+        configuration; otherwise the reasons as bits: joint n's limit 2^(n-1), too close to
+        the J1 axis, beyond reach, a tool orientation the robot cannot take (INRANGE_*)."""
+        try:
+            if isinstance(target, Location):
+                single = self.settings.take(consume=False).single
+                self.kin.ik(self._flange_matrix_m(target), self._q_planned, righty=self._righty_request, single=single)
+            else:
+                self.kin.check_limits(self.from_user_joints(target))
+        except KinematicsError as err:
+            if err.joint is not None:
+                return 1 << (err.joint - 1)
+            return _OUT_OF_RANGE_BITS.get(getattr(err, "detail", ""), INRANGE_TOO_FAR)
+        return 0
 
     def set_accel(self, accel: float | None, decel: float | None) -> None:
         """ACCEL acc, dec: percentages of the maximum, at most 100 (the SPEC maximum)."""
@@ -295,9 +346,10 @@ class VirtualController:
     def set_duration(self, seconds: float, always: bool = False) -> None:
         self.settings.set("duration_s", max(float(seconds), 0.0), always)
 
-    def set_modifier(self, key: str, value: bool, always: bool = False) -> None:
+    def set_modifier(self, key: str, value, always: bool = False) -> None:
         """SINGLE/MULTIPLE ("single"), COARSE/FINE ("coarse"), NULL/NONULL ("null"),
-        CPON/CPOFF ("cp"): the next motion, or every motion with ALWAYS."""
+        OVERLAP/NOOVERLAP ("overlap"), CPON/CPOFF ("cp"): the next motion, or every motion
+        with ALWAYS; PAYLOAD ("payload", always)."""
         self.settings.set(key, value, always)
 
     def request_configuration(self, righty: bool) -> None:
@@ -332,15 +384,18 @@ class VirtualController:
             if isinstance(target, Location):
                 if straight:
                     tip, tool = self._tip_matrix_m(target), self._tool_m()
-                    trajectory = self._cached(
+                    trajectory = self._as_run(
                         ("S", q0.tobytes(), tip.tobytes(), tool.tobytes(), righty, params.cartesian_speed_m_s,
                          params.accel, params.decel),
-                        lambda: plan_straight_move(self.kin, q0, tip, self.kin.max_velocity,
-                                                   self.kin.max_acceleration, params.cartesian_speed_m_s,
-                                                   righty=righty, accel=params.accel, decel=params.decel,
-                                                   tool=tool))
+                        lambda f: plan_straight_move(self.kin, q0, tip, self.kin.max_velocity,
+                                                     self.kin.max_acceleration, params.cartesian_speed_m_s * f,
+                                                     righty=righty, accel=params.accel, decel=params.decel,
+                                                     tool=tool),
+                        params)
                 else:
                     q1 = self.kin.ik(self._flange_matrix_m(target), q0, righty=righty, single=params.single)
+                    if params.overlap:
+                        self._check_overlap(q0, q1)
                     trajectory = self._joint_trajectory(q0, q1, params)
                 destination = target
             else:
@@ -350,8 +405,19 @@ class VirtualController:
                 destination = self._location_of(q1)
         except KinematicsError as err:
             raise ProgramError(err.message, err.code) from None
-        yield from self._launch(_timed(trajectory, params), params, destination, cp,
-                                straight and isinstance(target, Location))
+        yield from self._launch(trajectory, params, destination, cp, straight and isinstance(target, Location))
+
+    def _check_overlap(self, q0: np.ndarray, q1: np.ndarray) -> None:
+        """OVERLAP: a multi-turn joint (range over 360 deg) that would turn more than 180 deg,
+        which MULTIPLE does only to keep clear of a limit, is that joint's limit-stop error."""
+        multi_turn = self.kin.revolute & (self.kin.upper - self.kin.lower > 2 * math.pi)
+        over = np.nonzero(multi_turn & (np.abs(q1 - q0) > math.pi + 1e-9))[0]
+        if len(over):
+            raise KinematicsError.joint_limit(int(over[0]) + 1)
+
+    def ready_joints(self) -> tuple[float, ...]:
+        """READY's destination: the robot's READY joints (the model's `ready` numeric), V+ units."""
+        return self.to_user_joints(self.kin.ready)
 
     def drive(self, joint: int, change: float, speed: float, cp: bool = True):
         """DRIVE joint, change, speed: joint `joint` (1-based) by `change` (deg or mm) at
@@ -369,13 +435,29 @@ class VirtualController:
         except KinematicsError as err:
             raise ProgramError(err.message, err.code) from None
         trajectory = self._joint_trajectory(self._q_planned, q1, params)
-        yield from self._launch(_timed(trajectory, params), params, self._location_of(q1), cp)
+        yield from self._launch(trajectory, params, self._location_of(q1), cp)
 
     def _joint_trajectory(self, q0, q1, params: MotionParameters) -> Trajectory:
-        return self._cached(
+        return self._as_run(
             ("J", q0.tobytes(), q1.tobytes(), params.joint_speed, params.accel, params.decel),
-            lambda: plan_joint_move(q0, q1, self.kin.max_velocity * params.joint_speed,
-                                    self.kin.max_acceleration, accel=params.accel, decel=params.decel))
+            lambda f: plan_joint_move(q0, q1, self.kin.max_velocity * params.joint_speed * f,
+                                      self.kin.max_acceleration, accel=params.accel, decel=params.decel),
+            params)
+
+    def _as_run(self, key: tuple, plan, params: MotionParameters) -> Trajectory:
+        """The motion as it will run.  `plan(f)` plans it at f times the program speed.  The
+        monitor speed slows the planned motion down uniformly (see MotionSettings).  A motion
+        that would take less than DURATION is replanned at the lower speed that makes it last
+        that long, accelerations unchanged, as a lower SPEED would be ("the motion is
+        slowed", V+ Language Reference, DURATION): its acceleration and deceleration stay
+        short, and so do its blends with its neighbours.  Every motion lasts at least one
+        trajectory cycle, the minimum motion time (V+ guide v17 L6548-6553; a motion that
+        goes nowhere stays empty)."""
+        trajectory = self._cached(key, lambda: plan(1.0))
+        planned_duration = params.duration_s / params.time_scale
+        if 0.0 < trajectory.duration < planned_duration:
+            trajectory = self._cached(key + (planned_duration,), lambda: _slowed_down(plan, planned_duration))
+        return trajectory.stretched(max(trajectory.duration * params.time_scale, params.duration_s, TRAJECTORY_CYCLE_S))
 
     def _cached(self, key: tuple, plan) -> Trajectory:
         """A cyclic program asks for the same motions, from the same joints, over and over:
@@ -492,14 +574,17 @@ class VirtualController:
 
     def set_tool(self, tool: Location):
         """TOOL t: waits for the robot to stop, then locations refer to the new tool tip."""
-        yield from self.wait_stopped()
-        self.tool = tool
-        self._destination = self._location_of(self._q_planned)
+        yield from self._set_frame("tool", tool)
 
     def set_base(self, base: Location):
         """BASE: waits for the robot to stop, then the world frame is `base` in the robot frame."""
+        yield from self._set_frame("base", base)
+
+    def _set_frame(self, which: str, value: Location):
+        """TOOL and BASE break continuous path; DEST is then the robot's destination seen
+        through the new frame."""
         yield from self.wait_stopped()
-        self.base = base
+        setattr(self, which, value)
         self._destination = self._location_of(self._q_planned)
 
     def stop(self) -> None:
@@ -564,9 +649,17 @@ class VirtualController:
         self.cell.set_gripper(closed=(state == "close"))
 
 
-def _timed(trajectory: Trajectory, params: MotionParameters) -> Trajectory:
-    """The planned motion slowed by the monitor speed, and to DURATION if that is longer."""
-    return trajectory.stretched(max(trajectory.duration * params.time_scale, params.duration_s))
+def _slowed_down(plan, seconds: float) -> Trajectory:
+    """plan(f) for the speed factor f in (0, 1] at which the motion takes just under
+    `seconds` (bisection: a slower motion takes longer); the caller stretches the rest."""
+    slow, fast = 0.0, 1.0
+    for _ in range(DURATION_BISECTIONS):
+        middle = 0.5 * (slow + fast)
+        if plan(middle).duration >= seconds:
+            slow = middle
+        else:
+            fast = middle
+    return plan(fast)
 
 
 class _Still(Trajectory):

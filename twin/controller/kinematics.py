@@ -144,7 +144,8 @@ class _Scara:
 class RobotKinematics:
     """Kinematics of one robot (SI units, robot base frame)."""
 
-    def __init__(self, model: pin.Model, flange_frame: str, max_velocity, max_acceleration, name: str = ""):
+    def __init__(self, model: pin.Model, flange_frame: str, max_velocity, max_acceleration, name: str = "",
+                 ready=None, payload_kg=None):
         self.model = model
         self.data = model.createData()
         self.name = name
@@ -156,6 +157,10 @@ class RobotKinematics:
         self.upper = np.array(model.upperPositionLimit, dtype=float)
         self.max_velocity = np.asarray(max_velocity, dtype=float)
         self.max_acceleration = np.asarray(max_acceleration, dtype=float)
+        # READY: the joints of the robot's READY location (V+ READY), the neutral pose unless given.
+        self.ready = np.clip(pin.neutral(model) if ready is None else np.asarray(ready, dtype=float),
+                             self.lower, self.upper)
+        self.payload_kg = None if payload_kg is None else tuple(float(v) for v in payload_kg)  # rated, maximum
         if self.max_velocity.shape != (model.nv,) or self.max_acceleration.shape != (model.nv,):
             raise ValueError("max_velocity/max_acceleration need one value per joint")
         self.revolute = np.array([model.joints[i].shortname().startswith(("JointModelR", "JointModelRevolute"))
@@ -170,7 +175,8 @@ class RobotKinematics:
     def from_mjcf(cls, path: str | Path, flange_site: str = "flange") -> "RobotKinematics":
         """Pinocchio model from the MJCF (robot = first top-level body); joint speed and
         acceleration limits from the `<numeric>` entries `<model>/max_velocity` and
-        `<model>/max_acceleration` (pinocchio does not read them)."""
+        `<model>/max_acceleration` (pinocchio does not read them); the READY joints from
+        `<model>/ready` and the rated and maximum payload (kg) from `<model>/payload`."""
         path = Path(path)
         model = pin.buildModelFromMJCF(str(path))
         name, numeric = _read_numeric(path)
@@ -179,7 +185,8 @@ class RobotKinematics:
             amax = numeric[f"{name}/max_acceleration"]
         except KeyError as missing:
             raise ValueError(f"{path}: no <numeric name={missing}> (joint limits for the planner)") from None
-        return cls(model, flange_site, vmax, amax, name)
+        return cls(model, flange_site, vmax, amax, name, ready=numeric.get(f"{name}/ready"),
+                   payload_kg=numeric.get(f"{name}/payload"))
 
     # ------------------------------------------------------------ forward
     @property

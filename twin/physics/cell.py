@@ -459,6 +459,17 @@ class Cell:
         self._held_since = float(d.time)
         self._events.append({"t": round(float(d.time), 4), "kind": "grasp", "part": int(i),
                              "where": self.regions.region_of(p2)})
+        self._check_payload(i)
+
+    def _check_payload(self, i: int) -> None:
+        """A part heavier than the robot's maximum payload (the model's `payload` numeric) is
+        an "overload" event.  The controller does not weigh what it carries (PAYLOAD is the
+        program's own indication), so it is not a program error: the twin reports it."""
+        payload = self.kinematics.payload_kg
+        mass = float(self.model.body_mass[self._part_body[i]])
+        if payload is not None and mass > payload[-1]:
+            self._events.append({"t": round(self.time, 4), "kind": "overload", "part": int(i),
+                                 "mass_kg": round(mass, 3), "max_payload_kg": payload[-1]})
 
     def _grip_load(self, i: int) -> float:
         """Norm of the net force the gripper applies to part i, N: its weld plus every contact

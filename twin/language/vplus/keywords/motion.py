@@ -3,8 +3,8 @@
 Locations are transformations (`Location`) or precision points (tuples of joint values,
 degrees and mm).  The CP switch (ENABLE/DISABLE CP) is read when a motion is issued.
 Modifiers that take ALWAYS here are written with it as a keyword name (`CPOFF ALWAYS`,
-`SINGLE ALWAYS`); `DURATION t ALWAYS` needs a grammar rule that does not exist yet, so
-DURATION applies to the next motion only (docs/motion.md).
+`SINGLE ALWAYS`, `OVERLAP ALWAYS`); `DURATION t ALWAYS` needs a grammar rule that does
+not exist yet, so DURATION applies to the next motion only (docs/motion.md).
 """
 
 from __future__ import annotations
@@ -71,6 +71,41 @@ def _departs(rt, distance):
     yield from rt.robot.move(approach(rt.robot.destination(), distance), straight=True, cp=_cp(rt))
 
 
+@instruction("MOVET", waits=True)
+def _movet(rt, loc, hand):
+    """MOVET loc, hand: MOVE with the hand operated as the motion starts; a pneumatic hand
+    opens for an opening above 0 and closes otherwise (docs/motion.md)."""
+    rt.robot.hand_at_next_motion(_hand_for_opening(hand))
+    yield from _move(rt, loc)
+
+
+@instruction("MOVEST", waits=True)
+def _movest(rt, loc, hand):
+    rt.robot.hand_at_next_motion(_hand_for_opening(hand))
+    yield from _moves(rt, loc)
+
+
+def _hand_for_opening(opening) -> str:
+    return "open" if float(opening) > 0.0 else "close"
+
+
+@instruction("READY", waits=True)
+def _ready(rt):
+    """READY: a joint motion to the robot's READY location, in its standard configuration."""
+    yield from rt.robot.move(rt.robot.ready_joints(), straight=False, cp=_cp(rt))
+
+
+@function("INRANGE")
+def _inrange(rt, loc):
+    """INRANGE(loc): 0 if the robot can reach loc, otherwise bits saying why not."""
+    return float(rt.robot.inrange(_destination(loc)))
+
+
+@function("CONFIG")
+def _config(rt, select=0):
+    return float(rt.robot.configuration(int(select or 0)))
+
+
 @instruction("DRIVE", waits=True)
 def _drive(rt, joint, change, speed=None):
     yield from rt.robot.drive(int(joint), float(change), 100.0 if speed is None else float(speed), cp=_cp(rt))
@@ -129,7 +164,8 @@ def _modifier(name: str, key: str, value: bool) -> None:
 
 for _name, _key, _value in (("SINGLE", "single", True), ("MULTIPLE", "single", False),
                             ("COARSE", "coarse", True), ("FINE", "coarse", False),
-                            ("NULL", "null", True), ("NONULL", "null", False)):
+                            ("NULL", "null", True), ("NONULL", "null", False),
+                            ("OVERLAP", "overlap", True), ("NOOVERLAP", "overlap", False)):
     _modifier(_name, _key, _value)
 
 
@@ -138,6 +174,15 @@ def _brake(rt):
     """BRAKE: the robot decelerates to a stop at once, on its path; the motion is over
     (V+ guide v17 L6458-6461: "from any program task")."""
     rt.robot.stop()
+
+
+@instruction("PAYLOAD")
+def _payload(rt, percent):
+    """PAYLOAD percent: the payload indication, 0 to 100 % of the maximum payload.  Recorded
+    only: the twin's servos use the model's real masses (docs/motion.md)."""
+    if not 0.0 <= float(percent) <= 100.0:
+        raise fail(msg.ILLEGAL_VALUE, f"PAYLOAD {percent}")
+    rt.robot.set_modifier("payload", float(percent), always=True)
 
 
 @instruction("RIGHTY")
