@@ -218,7 +218,7 @@ class _ToAst(Transformer):
         return ast.Format(code, width, decimals)
 
     def prompt_statement(self, meta, children):
-        return ast.Prompt(children[0], children[1], **_pos(meta))
+        return ast.Prompt(children[0], list(children[1:]), **_pos(meta))
 
     def parameter_statement(self, meta, children):
         name, index, value = children
@@ -236,7 +236,8 @@ class _ToAst(Transformer):
         return ast.ExecuteProgram(task, normalize_name(str(name)), args, options or [], **_pos(meta))
 
     def instruction(self, meta, children):
-        return ast.Instruction(str(children[0]).upper(), children[1], **_pos(meta))
+        name, args, always = children
+        return ast.Instruction(str(name).upper(), args, always is not None, **_pos(meta))
 
     # ---- I/O and keyed statements (lang-library)
     def io_statement(self, meta, children):
