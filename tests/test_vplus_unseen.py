@@ -608,3 +608,31 @@ def test_a_broken_file_is_a_program_error_not_a_python_exception(text):
         if task.error is not None:
             raise task.error
     assert info.value.message.startswith("*") and info.value.file == "test.pg", info.value
+
+
+# ------------------------------------------------ on the cell: DURATION, #PHERE
+def test_duration_always_and_precision_point_here_and_dest_on_the_cell():
+    """DURATION t ALWAYS sets the least time of every motion until changed
+    ([000] "Motion Modifiers", L6646-6650); #PHERE and #PDEST are HERE and DEST
+    as precision points: the joint values now and at the last destination
+    ([000] "Precision Points", L5944-5946)."""
+    from test_motion_controller import A, B, run_on_cell
+
+    text = """\
+.PROGRAM timed()
+\tDURATION 1.5 ALWAYS
+\tMOVE a
+\tMOVE b
+\tSET #goal = #PDEST\t; while the robot is still on its way
+\tBREAK
+\tSET #now = #PHERE
+.END
+"""
+    sim, task, outcome, _ = run_on_cell(text, locations={"a": A, "b": B})
+    assert outcome.errors == []
+    assert [m.duration_s for m in sim.controller.history] == pytest.approx([1.5, 1.5])
+    controller = sim.controller
+    assert task.globals["#goal"] == controller.to_user_joints(controller.destination_joints())
+    # BREAK waits until the joints settle (FINE): #PHERE is then at the goal.
+    assert task.globals["#now"] == pytest.approx(task.globals["#goal"], abs=0.05)
+    assert controller.location_of_joints(task.globals["#goal"]).position() == pytest.approx(B.position(), abs=1e-3)

@@ -463,7 +463,8 @@ class ProgramCompiler(LibraryStatements):
         return f"_real({value})" if key in self.scope.doubles else f"_single({value})"
 
     def s_SetLocation(self, s: ast.SetLocation, depth: int) -> None:
-        self.assign(s.target, f"_location({self.expr(s.value)})", depth)
+        check = "_precision_point" if s.target.name.startswith("#") else "_location"
+        self.assign(s.target, f"{check}({self.expr(s.value)})", depth)
 
     def s_Declare(self, s: ast.Declare, depth: int) -> None:
         for var, dims in s.names:
