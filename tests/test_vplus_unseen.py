@@ -556,7 +556,14 @@ MALFORMED = [
     ("WAIT.EVENT 1, 2, 3", msg.INVALID_ARGUMENT, 3),
     ("VALUE 3:", msg.CONTROL_STRUCTURE, 3),
     ("x = = 2", msg.SYNTAX_ERROR, 3),
-    ("TYPE /Q", None, 3),
+    ("TYPE /Q", msg.SYNTAX_ERROR, 3),
+    ('IF $x THEN\nEND', msg.WRONG_TYPE, 3),
+    ('WHILE NOT "a" DO\nEND', msg.WRONG_TYPE, 3),
+    ('x = "a" + 1', msg.WRONG_TYPE, 3),
+    ("TYPE HERE", msg.DEVICE_NOT_READY, 3),  # the interpreter alone has no robot
+    ("DURATION 1 ALWAYS", msg.DEVICE_NOT_READY, 3),
+    ("SIGNAL 1, 2, 3004, -3005", msg.ILLEGAL_SIGNAL, 3),
+    ("CALL bad(1)", msg.INVALID_ARGUMENT, 3),
 ]
 
 

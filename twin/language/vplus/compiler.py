@@ -377,6 +377,8 @@ class ProgramCompiler(LibraryStatements):
 
     def condition(self, e: ast.Expr) -> str:
         """An expression as a Python truth value (V+: nonzero is true)."""
+        if is_string(e):  # IF $s THEN, NOT "a": a string is not a truth value
+            raise self.error(self.current, msg.WRONG_TYPE, "a string where a condition is needed")
         if isinstance(e, ast.Binary):
             if e.op in _RELATIONAL:
                 return self.relation(e)

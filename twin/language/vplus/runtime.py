@@ -223,7 +223,9 @@ class Task(TaskControl):
     def robot(self):
         """The robot; a task that does not hold it may read it but not move it."""
         robot = self.system.robot
-        if robot is None or self.system.robot_holder is self:
+        if robot is None:  # a system made without a cell (the interpreter alone)
+            raise values.fail(msg.DEVICE_NOT_READY, "no robot")
+        if self.system.robot_holder is self:
             return robot
         return _RobotOfAnotherTask(robot, self)
 
