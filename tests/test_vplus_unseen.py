@@ -643,3 +643,12 @@ def test_duration_always_and_precision_point_here_and_dest_on_the_cell():
     # BREAK waits until the joints settle (FINE): #PHERE is then at the goal.
     assert task.globals["#now"] == pytest.approx(task.globals["#goal"], abs=0.05)
     assert controller.location_of_joints(task.globals["#goal"]).position() == pytest.approx(B.position(), abs=1e-3)
+
+
+def test_select_robot_in_a_one_robot_cell():
+    """SELECT ROBOT = n picks the robot a task drives, SELECT(ROBOT) tells which
+    ([000] L5539, L7020-7023); the cell has one robot: unit 1."""
+    text = ".PROGRAM pick.robot()\n\tSELECT ROBOT = 1\t; the only arm\n\tTYPE \"robot \", SELECT(ROBOT)\n.END"
+    assert output_of(text) == "robot 1\n"
+    assert failure(text.replace("= 1", "= 2")).code == msg.ILLEGAL_VALUE
+    assert failure(text.replace("SELECT(ROBOT)", "SELECT(VISION)")).code == msg.DEVICE_NOT_READY
