@@ -652,3 +652,95 @@ def test_select_robot_in_a_one_robot_cell():
     assert output_of(text) == "robot 1\n"
     assert failure(text.replace("= 1", "= 2")).code == msg.ILLEGAL_VALUE
     assert failure(text.replace("SELECT(ROBOT)", "SELECT(VISION)")).code == msg.DEVICE_NOT_READY
+
+
+# --------------------------------------------- arithmetic, loops, LOCAL state
+CALC = """\
+.PROGRAM calc()
+\tTYPE 1/3, " ", -2.5, " ", 1E6, " ", 123456789\t; reals are singles
+\tTYPE SIN(30), " ", COS(60), " ", ATAN2(1, 1), " ", SQRT(2)\t; degrees
+\tTYPE INT(-2.7), " ", ABS(-3), " ", MAX(1, 5, 3), " ", MIN(4, -2), " ", 7 MOD 3
+\tTYPE ^HFF, " ", ^B101, " ", ^17, " ", 'A, " ", .5, " ", 1.
+\tTYPE 5 BAND 3, " ", 5 BOR 3, " ", 5 BXOR 3, " ", COM 0, " ", NOT 0
+\tTYPE 1 < 2 AND 2 < 3, " ", 1 == 1 OR 0, " ", 3 > 2 > 1
+\tFOR i = 10 TO 1 STEP -3\t; counting down
+\t    TYPE i, " ", /S
+\tEND
+\tTYPE
+\tFOR i = 1 TO 3
+\t    FOR j = 1 TO 3
+\t        IF i*j == 4 GOTO 50\t; out of both loops
+\t    END
+\tEND
+50\tTYPE "out at ", i, ",", j
+\tm[1,2] = 12
+\tm[2,1] = 21
+\tTYPE m[1,2]+m[2,1]
+\tCALL cnt()
+\tCALL cnt()
+\t$a = "Hello"
+\tTYPE $a+" "+$CHR(87)+"orld", " ", LEN($a), " ", $a == "HELLO", " ", $ENCODE(/F6.2, PI)
+.END
+
+.PROGRAM cnt()
+\tLOCAL n\t\t; kept between calls
+\tIF NOT DEFINED(n) THEN
+\t    n = 0
+\tEND
+\tn = n+1
+\tTYPE "calls ", n
+.END
+"""
+
+
+def test_arithmetic_radix_constants_loops_and_local_state():
+    """Single-precision reals exact to 16,777,216 ([000] L3868-3895); SIN and
+    COS take degrees; ^H ^B ^ (octal) and 'c constants ([000] L3895-3910);
+    AND and OR bind tighter than the comparisons, which go left to right
+    ([000] L4324-4345); TRUE is -1; FOR with a negative STEP; a GOTO out of
+    nested loops; LOCAL variables keep their values between calls; string
+    comparison ignores case while UPPER is on ([000] L4315-4321)."""
+    assert output_of(CALC) == (
+        "0.3333333 -2.5 1000000 123456792\n"
+        "0.5 0.5 45 1.414214\n"
+        "-2 3 5 -2 1\n"
+        "255 5 15 65 0.5 1\n"
+        "1 7 6 -1 -1\n"
+        "-1 0 0\n"
+        "10 7 4 1 \n"
+        "out at 2,2\n"
+        "33\n"
+        "calls 1\ncalls 2\n"
+        "Hello World 5 -1   3.14\n"
+    )
+
+
+def test_palletizing_on_the_cell_visits_every_place_with_straight_approaches():
+    """The grid of the first program, driven on the SCARA cell: APPRO p, 30 and
+    DEPARTS 30 move along the tool's z, which points down (pitch 180), so the
+    robot ends 30 mm above the last place ([000] "APPRO, DEPART", "SHIFT")."""
+    from test_motion_controller import run_on_cell
+
+    text = """\
+.PROGRAM pal.cell()
+\tSPEED 50 ALWAYS
+\tSET corner = TRANS(300, -100, 200, 0, 180, 180)
+\tFOR r = 0 TO 1
+\t    FOR c = 0 TO 1
+\t        SET p = SHIFT(corner BY c*60, r*60, 0)
+\t        APPRO p, 30
+\t        MOVES p
+\t        DEPARTS 30
+\t    END
+\tEND
+\tBREAK
+\tTYPE "at ", /F6.1, DX(HERE), DY(HERE), DZ(HERE)
+.END
+"""
+    sim, task, outcome, _ = run_on_cell(text)
+    assert outcome.errors == []
+    assert task.system.console.output == "at  360.0 -40.0 230.0\n"
+    stops = [(m.straight, tuple(round(v, 3) for v in m.destination.position())) for m in sim.controller.history]
+    places = [(300.0 + 60 * c, -100.0 + 60 * r) for r in range(2) for c in range(2)]
+    assert stops == [(straight, (x, y, z)) for x, y in places
+                     for straight, z in ((False, 230.0), (True, 200.0), (True, 230.0))]
