@@ -744,3 +744,13 @@ def test_palletizing_on_the_cell_visits_every_place_with_straight_approaches():
     places = [(300.0 + 60 * c, -100.0 + 60 * r) for r in range(2) for c in range(2)]
     assert stops == [(straight, (x, y, z)) for x, y in places
                      for straight, z in ((False, 230.0), (True, 200.0), (True, 230.0))]
+
+
+@pytest.mark.parametrize("text, detail", [
+    (program("x = (1 + 2"), "unexpected end of line"),
+    (".PROGRAM a()\nTYPE 1\n", "unexpected end of file"),
+    (program("x = 1 +* 2"), "unexpected '* 2'"),
+])
+def test_a_syntax_error_names_what_the_parser_met(text, detail):
+    """The message says what was found where the line went wrong."""
+    assert detail in failure(text).message

@@ -280,9 +280,11 @@ def _syntax_error(err: UnexpectedInput, text: str, file: str) -> ProgramError:
         line = len(lines)
         column = 1
     source = lines[line - 1] if 0 < line <= len(lines) else ""
-    if isinstance(err, UnexpectedToken):
-        got = str(err.token) or "end of line"
-        detail = f"unexpected {got.strip()!r}"
+    if isinstance(err, UnexpectedToken) and err.token.type == "$END":
+        detail = "unexpected end of file (a .PROGRAM or data section without its .END)"
+    elif isinstance(err, UnexpectedToken):
+        got = str(err.token).strip()  # a line end is blank
+        detail = f"unexpected {got!r}" if got else "unexpected end of line"
     elif isinstance(err, UnexpectedCharacters):
         detail = f"unexpected character {source[column - 1:column]!r}" if column else "unexpected character"
     else:
