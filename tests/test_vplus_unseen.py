@@ -754,3 +754,24 @@ def test_palletizing_on_the_cell_visits_every_place_with_straight_approaches():
 def test_a_syntax_error_names_what_the_parser_met(text, detail):
     """The message says what was found where the line went wrong."""
     assert detail in failure(text).message
+
+
+def test_parentheses_of_an_empty_argument_list_may_be_left_out():
+    """.PROGRAM name(parameter_list): "the parameter list ... optional" ([000]
+    L853-855); CALL and EXECUTE of a program without arguments likewise."""
+    text = """\
+.PROGRAM main\t; no parameter list
+\ttask.no = 2
+\tEXECUTE task.no worker
+\tEXECUTE 3 worker, 1
+\tCALL tell
+\tWAIT TASK(1, 2) == 0 AND TASK(1, 3) == 0
+.END
+.PROGRAM worker
+\tTYPE "worker in task ", TASK()
+.END
+.PROGRAM tell()
+\tTYPE "told"
+.END"""
+    out = output_of(text)
+    assert sorted(out.splitlines()) == ["told", "worker in task 2", "worker in task 3"]

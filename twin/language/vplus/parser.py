@@ -198,7 +198,7 @@ class _ToAst(Transformer):
         return ast.Goto(int(children[0]), **_pos(meta))
 
     def call_statement(self, meta, children):
-        return ast.CallProgram(normalize_name(str(children[0])), children[1], **_pos(meta))
+        return ast.CallProgram(normalize_name(str(children[0])), children[1] or [], **_pos(meta))
 
     def calls_statement(self, meta, children):
         return ast.CallProgram(None, children[1], name_expr=children[0], **_pos(meta))
@@ -233,7 +233,7 @@ class _ToAst(Transformer):
 
     def execute_statement(self, meta, children):
         task, name, args, options = children
-        return ast.ExecuteProgram(task, normalize_name(str(name)), args, options or [], **_pos(meta))
+        return ast.ExecuteProgram(task, normalize_name(str(name)), args or [], options or [], **_pos(meta))
 
     def instruction(self, meta, children):
         name, args, always = children
