@@ -564,6 +564,7 @@ MALFORMED = [
     ("DURATION 1 ALWAYS", msg.DEVICE_NOT_READY, 3),
     ("SIGNAL 1, 2, 3004, -3005", msg.ILLEGAL_SIGNAL, 3),
     ("CALL bad(1)", msg.INVALID_ARGUMENT, 3),
+    ("timer = TIMER(1)", msg.INVALID_ARGUMENT, 3),  # TIMER n = value: the instruction
 ]
 
 

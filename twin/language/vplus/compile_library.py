@@ -20,7 +20,7 @@ import dataclasses
 
 from . import ast
 from . import messages as msg
-from .keywords import INSTRUCTIONS, NAME_ARGUMENTS, WRITES_FIRST_ARGUMENT
+from .keywords import INSTRUCTIONS, NAME_ARGUMENTS, WRITES_FIRST_ARGUMENT, arity
 
 FORMAT_ARGUMENTS = {"$ENCODE"}  # arguments are TYPE items: expressions and /I0, /F8.3 ...
 ARRAY_ARGUMENTS = {"$UNPACK"}  # the first argument $a[i] is passed as (array, index)
@@ -79,6 +79,8 @@ class LibraryStatements:
         spec = INSTRUCTIONS.get(s.name)
         if spec is None:
             raise self.error(s, msg.UNKNOWN_KEYWORD, s.name)
+        fewest, most = arity(spec.function)  # the value after "=" is the first
+        self.argument_count(f"{s.name} ... =", s.args, max(fewest - 1, 0), most - 1)
         args = []
         for a in s.args:
             if a is None:
