@@ -6,9 +6,7 @@ twin check. One full 100-part run (about 7 s of wall time) is shared by the test
 
 from __future__ import annotations
 
-import json
 import statistics
-from pathlib import Path
 
 import pytest
 
@@ -16,18 +14,16 @@ from twin.check import main_check
 from twin.cli import main as twin_main
 from twin.runner import run_program
 
-ROOT = Path(__file__).resolve().parent.parent
+from conftest import ROOT, twin_run
+from conftest import SCARA_EXPECT as EXPECT
+from conftest import SCARA_SCENE as SCENE
+
 PROGRAM = ROOT / "programs" / "vplus" / "move_parts.pg"
-SCENE = ROOT / "scenes" / "scara_pick.toml"
-EXPECT = ROOT / "scenes" / "scara_pick.expect.toml"
 
 
 @pytest.fixture(scope="module")
 def demo(tmp_path_factory):
-    out = tmp_path_factory.mktemp("demo")
-    report = out / "report.json"
-    code = twin_main(["run", str(PROGRAM), "--scene", str(SCENE), "--report", str(report)])
-    return code, json.loads(report.read_text()), report
+    return twin_run(PROGRAM, tmp_path_factory.mktemp("demo"))
 
 
 def test_program_ends_normally_with_the_manuals_output(demo):

@@ -5,28 +5,24 @@ through the interpreter and the library."""
 
 from __future__ import annotations
 
-import json
 import statistics
 from pathlib import Path
 
 import pytest
 
 from twin.check import main_check
-from twin.cli import main as twin_main
 from twin.runner import run_program
 
-ROOT = Path(__file__).resolve().parent.parent
+from conftest import ROOT, twin_run
+from conftest import SCARA_EXPECT as EXPECT
+from conftest import SCARA_SCENE as SCENE
+
 PROJECT = ROOT / "programs" / "gpl" / "pick_place"
-SCENE = ROOT / "scenes" / "scara_pick.toml"
-EXPECT = ROOT / "scenes" / "scara_pick.expect.toml"
 
 
 @pytest.fixture(scope="module")
 def run(tmp_path_factory):
-    out = tmp_path_factory.mktemp("gpl_pick_place")
-    report = out / "report.json"
-    code = twin_main(["run", str(PROJECT), "--scene", str(SCENE), "--report", str(report)])
-    return code, json.loads(report.read_text()), report
+    return twin_run(PROJECT, tmp_path_factory.mktemp("gpl_pick_place"))
 
 
 def test_project_ends_normally_with_the_demos_output(run):

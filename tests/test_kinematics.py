@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import mujoco
 import numpy as np
 import pytest
@@ -16,19 +14,9 @@ from twin.controller.kinematics import (
 )
 from twin.controller.location import Location
 
-ROBOT = Path(__file__).resolve().parents[1] / "models" / "robots" / "cobra_s600.xml"
-
-
-@pytest.fixture(scope="module")
-def kin() -> RobotKinematics:
-    return RobotKinematics.from_mjcf(ROBOT)
-
-
-def _pose(x, y, z, roll):
-    """Flange pose (m) of a tool-down SCARA location (x, y, z mm, 0, 180, roll)."""
-    T = Location(x * 1e3, y * 1e3, z * 1e3, 0, 180, roll).matrix()
-    T[:3, 3] /= 1e3
-    return T
+from conftest import COBRA as ROBOT
+from conftest import ROOT
+from conftest import tool_down_pose as _pose
 
 
 def test_model_data_read_from_the_mjcf(kin):
@@ -177,7 +165,7 @@ def test_single_keeps_the_wrist_within_half_a_turn(kin):
     assert np.allclose(kin.fk(q), T, atol=1e-9)
 
 
-GANTRY = Path(__file__).resolve().parents[1] / "models" / "robots" / "cartesian_gantry.xml"
+GANTRY = ROOT / "models" / "robots" / "cartesian_gantry.xml"
 
 
 def test_gantry_ik_round_trip_over_the_whole_workspace():

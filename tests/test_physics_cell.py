@@ -70,19 +70,26 @@ class Driver:
             self.wait(0.02)
         raise AssertionError("no part presented at the nest")
 
-    def pick(self) -> None:
-        self.move(self.ik("pick", 25.4), 0.5)   # APPRO pick, 25.4
-        self.move(self.ik("pick"), 0.3)         # MOVES pick
-        self.cell.set_gripper(True)             # CLOSEI
+    def visit(self, name: str, clearance: float, close: bool) -> None:
+        self.move(self.ik(name, clearance), 0.5)  # APPRO name, clearance
+        self.move(self.ik(name), 0.3)             # MOVES name
+        self.cell.set_gripper(close)              # CLOSEI / OPENI
         self.wait(0.16)
-        self.move(self.ik("pick", 25.4), 0.3)   # DEPARTS 25.4
+        self.move(self.ik(name, clearance), 0.3)  # DEPARTS clearance
+
+    def pick(self) -> None:
+        self.visit("pick", 25.4, close=True)
+
+    def pick_next(self) -> int:
+        """Wait for the feeder's next part and pick it: the id of the part held."""
+        self.wait_for_part()
+        self.pick()
+        held = self.cell.gripper_holding()
+        assert held is not None
+        return held
 
     def place(self) -> None:
-        self.move(self.ik("place", 50.8), 0.5)  # APPRO place, 50.8
-        self.move(self.ik("place"), 0.3)        # MOVES place
-        self.cell.set_gripper(False)            # OPENI
-        self.wait(0.16)
-        self.move(self.ik("place", 50.8), 0.3)  # DEPARTS 50.8
+        self.visit("place", 50.8, close=False)
 
 
 @pytest.fixture()
@@ -235,10 +242,7 @@ def test_one_pick_and_place_cycle_carries_the_part_into_the_bin(cell: Cell):
 
 def test_opening_mid_air_over_the_table_drops_the_part(cell: Cell):
     drv = Driver(cell)
-    drv.wait_for_part()
-    drv.pick()
-    pid = cell.gripper_holding()
-    assert pid is not None
+    pid = drv.pick_next()
     # Swing out over bare table, well above it, and let go.
     loc = [450.0, -250.0, 300.0, 0.0, 180.0, 180.0]
     q = cell.kinematics.ik(vplus_to_matrix(loc), drv.q)
@@ -255,10 +259,7 @@ def test_opening_mid_air_over_the_table_drops_the_part(cell: Cell):
 def test_slip_releases_the_part_when_the_grip_is_too_weak(cell: Cell):
     """With the jaw force cut to almost nothing, the net load the gripper carries exceeds 2*mu*F: slip."""
     drv = Driver(cell)
-    drv.wait_for_part()
-    drv.pick()
-    pid = cell.gripper_holding()
-    assert pid is not None
+    pid = drv.pick_next()
     acts = [cell.model.actuator(n).id for n in ("gripper/finger_left_act", "gripper/finger_right_act")]
     cell.model.actuator_forcerange[acts] = [[-0.05, 0.05]] * 2
     drv.move(drv.ik("place", 50.8), 0.5)

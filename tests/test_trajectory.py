@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -12,24 +10,12 @@ from twin.controller.kinematics import (
     LOCATION_OUT_OF_RANGE,
     STRAIGHT_LINE_CONFIG,
     KinematicsError,
-    RobotKinematics,
 )
-from twin.controller.location import Location
 from twin.controller.trajectory import joint_move_time, plan_joint_move, plan_straight_move
 
-ROBOT = Path(__file__).resolve().parents[1] / "models" / "robots" / "cobra_s600.xml"
+from conftest import tool_down_pose as _pose
+
 DT = 0.0005
-
-
-@pytest.fixture(scope="module")
-def kin() -> RobotKinematics:
-    return RobotKinematics.from_mjcf(ROBOT)
-
-
-def _pose(x, y, z, roll):
-    T = Location(x * 1e3, y * 1e3, z * 1e3, 0, 180, roll).matrix()
-    T[:3, 3] /= 1e3
-    return T
 
 
 def _random_q(kin, rng, righty=True):

@@ -408,13 +408,22 @@ def test_auto_arrays_keep_their_declared_size_global_arrays_grow():
     assert task.error.code == msg.ILLEGAL_ARRAY_INDEX and task.error.line == 3
 
 
-@pytest.mark.parametrize("body", ["pi = 3", "AUTO sig", "FOR timer = 1 TO 2\nEND", "PROMPT \"x\", priority",
-                                  "$error = \"x\""])
+@pytest.mark.parametrize("body", ["pi = 3", "AUTO true", "FOR tps = 1 TO 2\nEND", "PROMPT \"x\", priority",
+                                  "SET here = TRANS(1)"])
 def test_a_reserved_word_is_not_a_variable_name(body):
-    """[000] L3778-3800: "pi (reserved word)" is rejected with an error message."""
+    """[000] L3778-3800: "pi (reserved word)" is rejected with an error message.
+    Reserved: the function keywords written without an argument list."""
     with pytest.raises(ProgramError) as info:
         run_vplus(program(body))
     assert info.value.code == msg.SYNTAX_ERROR and info.value.line == 2 and "reserved" in info.value.message
+
+
+def test_a_function_that_needs_arguments_may_name_a_variable():
+    """[000] L7699-7702 (eV+ guide L3131): `error = IOSTAT(dlun)`; the name of a
+    function that is always followed by "(" stays free for a variable, and the
+    function is still there: docs/vplus.md, "Reserved words"."""
+    body = "error = -504\nsig = 2\n$error = $ERROR(error)\nTYPE error, sig, \" \", $error, SIG(-1)"
+    assert output_of(program(body)) == "-5042 *Unexpected end of file*-1\n"
 
 
 def test_a_constant_function_passed_to_a_call_is_a_value():

@@ -53,25 +53,34 @@ def test_string_functions():
     assert out == "5 3 4 0\nbcd 66 65 -1\n12.5 0 -300\nab1\n"
 
 
-def test_decode_takes_a_token_and_removes_it_from_the_variable():
+# (body, output): string functions that write back or work on packed strings.
+STRING_CASES = {
     # $DECODE($var, $breaks, mode): mode 0 the text up to a break, mode 1 the breaks.
-    out = output_of(program(
+    "decode takes a token and removes it from the variable": (
         '$s = "12, 34"\n'
         '$a = $DECODE($s, ", ", 0)\n$b = $DECODE($s, ", ", 1)\n$c = $DECODE($s, ", ", 0)\n'
-        'TYPE $a, "|", $b, "|", $c, "|", $s, "|"'))
-    assert out == "12|, |34||\n"
+        'TYPE $a, "|", $b, "|", $c, "|", $s, "|"',
+        "12|, |34||\n"),
+    "decode writes back into auto and array variables": (
+        'AUTO $line\n$line = "a;b"\n$t[2] = "x y"\n'
+        'TYPE $DECODE($line, ";", 0), $line, " ", $DECODE($t[2], " ", 0), $t[2]',
+        "a;b x y\n"),
+    "pack and unpack": (
+        '$buf[0] = "abcdef"\nPACK $buf[0], 3, 2 = "XYZ"\nPACK $buf[1], 2, 3 = "q"\n'
+        'TYPE $buf[0], "|", $buf[1], "|", $UNPACK($buf[0], 2, 3)',
+        "abXYef| q  |bXY\n"),
+    "binary conversions round trip big endian": (
+        'TYPE INTB($INTB(-2)), " ", LNGB($LNGB(^D123456789)), " ", FLTB($FLTB(1.5)), " ", DBLB($DBLB(0.1))\n'
+        'TYPE ASC($INTB(258), 1), " ", ASC($INTB(258), 2), " ", LEN($DBLB(1)), " ", INTB("xx"+$INTB(7), 3)\n'
+        'SET loc = TRANS(10, 20, 30, 0, 180, 45)\n'
+        'TYPE LEN($TRANSB(loc)), " ", IDENTICAL(TRANSB($TRANSB(loc)), loc)',
+        "-2 123456789 1.5 0.1\n1 2 8 7\n48 -1\n"),
+}
 
 
-def test_decode_writes_back_into_auto_and_array_variables():
-    out = output_of(program('AUTO $line\n$line = "a;b"\n$t[2] = "x y"\n'
-                            'TYPE $DECODE($line, ";", 0), $line, " ", $DECODE($t[2], " ", 0), $t[2]'))
-    assert out == "a;b x y\n"
-
-
-def test_pack_and_unpack():
-    out = output_of(program('$buf[0] = "abcdef"\nPACK $buf[0], 3, 2 = "XYZ"\nPACK $buf[1], 2, 3 = "q"\n'
-                            'TYPE $buf[0], "|", $buf[1], "|", $UNPACK($buf[0], 2, 3)'))
-    assert out == "abXYef| q  |bXY\n"
+@pytest.mark.parametrize("body, output", STRING_CASES.values(), ids=STRING_CASES)
+def test_string_functions_that_write_back_or_pack(body, output):
+    assert output_of(program(body)) == output
 
 
 def test_pack_and_unpack_span_128_character_elements():
@@ -80,15 +89,6 @@ def test_pack_and_unpack_span_128_character_elements():
     a = system.globals["$a[]"]
     assert a[3] == " " * 126 + "wx" and a[4] == "yz"
     assert system.globals["$s"] == " wxyz " and system.globals["$t"] == "yz"
-
-
-def test_binary_conversions_round_trip_big_endian():
-    out = output_of(program(
-        'TYPE INTB($INTB(-2)), " ", LNGB($LNGB(^D123456789)), " ", FLTB($FLTB(1.5)), " ", DBLB($DBLB(0.1))\n'
-        'TYPE ASC($INTB(258), 1), " ", ASC($INTB(258), 2), " ", LEN($DBLB(1)), " ", INTB("xx"+$INTB(7), 3)\n'
-        'SET loc = TRANS(10, 20, 30, 0, 180, 45)\n'
-        'TYPE LEN($TRANSB(loc)), " ", IDENTICAL(TRANSB($TRANSB(loc)), loc)'))
-    assert out == "-2 123456789 1.5 0.1\n1 2 8 7\n48 -1\n"
 
 
 def test_encode_uses_the_type_formats_and_string_length_is_limited():

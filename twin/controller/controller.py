@@ -266,6 +266,10 @@ class VirtualController:
         """#PHERE: measured joints (SI)."""
         return self.cell.robot_qpos()
 
+    def destination_joints(self) -> np.ndarray:
+        """#PDEST: the joints the robot was last told to go to (SI)."""
+        return self._q_planned.copy()
+
     def location_of_joints(self, values) -> Location:
         """The location a precision point (joint values, degrees and mm) puts the tool tip at."""
         return self._location_of(self.from_user_joints(values))

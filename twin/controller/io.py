@@ -1,5 +1,6 @@
 """Digital I/O as the controller numbers it (V+ guide v17, "Digital I/O"):
-outputs 1-512, inputs 1001-1512, soft signals 2001-2512.  A negative number
+outputs 1-512, inputs 1001-1512, soft signals 2001-2512 and 3001-3004 (V+ guide
+v17 L328-331, L11979-11980: "soft signals (2000-2512 and 3001-3004)").  A negative number
 means the signal's off state.  Inputs are written by the cell's sensors.
 """
 
@@ -12,6 +13,7 @@ ILLEGAL_SIGNAL = -403  # V+ "*Illegal digital signal*"
 OUTPUTS = range(1, 513)
 INPUTS = range(1001, 1513)
 SOFT = range(2001, 2513)
+SHARED_SOFT = range(3001, 3005)  # soft signals shared by all processors
 
 
 class DigitalIO:
@@ -21,7 +23,7 @@ class DigitalIO:
 
     @staticmethod
     def _check(number: int, writable: bool) -> None:
-        if number in OUTPUTS or number in SOFT or (not writable and number in INPUTS):
+        if number in OUTPUTS or number in SOFT or number in SHARED_SOFT or (not writable and number in INPUTS):
             return
         raise ProgramError(f"*Illegal digital signal* {number}", ILLEGAL_SIGNAL)
 

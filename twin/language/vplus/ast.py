@@ -141,7 +141,7 @@ class Format:
 @dataclass
 class Prompt(Statement):
     text: Expr
-    target: Var
+    targets: list[Var]  # one string variable, or real variables (maybe none)
 
 
 @dataclass
@@ -174,6 +174,7 @@ class Instruction(Statement):
 
     name: str  # upper case
     args: list[Expr | None]
+    always: bool = False  # ended with ALWAYS: DURATION 0.5 ALWAYS, CPON ALWAYS
 
 
 # Block statements, as built by structure.py.

@@ -6,8 +6,9 @@
   assigns them.  ATTACH (lun, 4) returns the unit it picked, written into lun,
   which may still be undefined before the statement.
 * `KeyedAssign`: `KEYWORD args = value` -> `I[name](rt, value, args...)`.
-* GETC(lun) in wait mode: a function cannot wait, so the step first waits
-  (`yield from`) until the unit has a byte, then runs; GETC finds it there.
+* GETC(lun) in wait mode: a function cannot wait, so the step (or the
+  condition of IF, WHILE, UNTIL, CASE) first waits (`yield from`) until the
+  unit has a byte, then runs; GETC finds it there.
 * Functions that assign to their first argument ($DECODE, TAS) return
   (result, new value); the expression stores the new value with `:=`, so an
   AUTO variable (a Python local) can be written from inside an expression.
@@ -17,13 +18,13 @@ from __future__ import annotations
 
 import dataclasses
 
-from ...errors import ProgramError
 from . import ast
 from . import messages as msg
-from .keywords import INSTRUCTIONS, NAME_ARGUMENTS, WRITES_FIRST_ARGUMENT
+from .keywords import INSTRUCTIONS, NAME_ARGUMENTS, WRITES_FIRST_ARGUMENT, arity
 
 FORMAT_ARGUMENTS = {"$ENCODE"}  # arguments are TYPE items: expressions and /I0, /F8.3 ...
 ARRAY_ARGUMENTS = {"$UNPACK"}  # the first argument $a[i] is passed as (array, index)
+FORMAT_CODES = set("SCXBUNDFEGHOI")  # formats.py renders each of them
 LIBRARY_CALLS = WRITES_FIRST_ARGUMENT | NAME_ARGUMENTS | FORMAT_ARGUMENTS | ARRAY_ARGUMENTS
 
 
@@ -67,7 +68,10 @@ class LibraryStatements:
             self.assign(unit_var, result, depth + 1)
 
     def io_item(self, item) -> str:
+        """A TYPE, WRITE or $ENCODE item: an expression or a format specifier."""
         if isinstance(item, ast.Format):
+            if item.code not in FORMAT_CODES:
+                raise self.error(self.current, msg.SYNTAX_ERROR, f"unknown format /{item.code}")
             return f"_fmt({item.code!r}, {item.width!r}, {item.decimals!r})"
         return self.expr(item)
 
@@ -75,6 +79,8 @@ class LibraryStatements:
         spec = INSTRUCTIONS.get(s.name)
         if spec is None:
             raise self.error(s, msg.UNKNOWN_KEYWORD, s.name)
+        fewest, most = arity(spec.function)  # the value after "=" is the first
+        self.argument_count(f"{s.name} ... =", s.args, max(fewest - 1, 0), most - 1)
         args = []
         for a in s.args:
             if a is None:
@@ -87,9 +93,10 @@ class LibraryStatements:
                 args.append(self.expr(a))
         self.emit(depth, f"I[{s.name!r}](rt, {self.expr(s.value)}{''.join(', ' + a for a in args)})")
 
-    def wait_for_input(self, s: ast.Statement, depth: int) -> None:
-        """Called for simple statements only (not for IF/WHILE/... heads)."""
-        for call in _calls(s, "GETC"):
+    def wait_for_input(self, node, depth: int) -> None:
+        """Wait before a simple statement, or before a condition (IF, WHILE,
+        UNTIL, CASE, IF ... GOTO) is evaluated, for the GETCs in it."""
+        for call in _calls(node, "GETC"):
             mode = call.args[1] if len(call.args) > 1 else None
             if call.args and call.args[0] is not None and (mode is None or (isinstance(mode, ast.Num) and mode.value == 0)):
                 self.emit(depth, f"yield from rt.system.devices.wait_for_byte(rt, {self.expr(call.args[0])})")
@@ -131,8 +138,7 @@ class LibraryStatements:
         if e.name in ARRAY_ARGUMENTS:
             first = e.args[0] if e.args else None
             if not isinstance(first, ast.Var) or not first.indices:
-                raise ProgramError(msg.message(msg.INVALID_ARGUMENT) + f" {e.name} needs an array element",
-                                   msg.INVALID_ARGUMENT)
+                raise self.error(self.current, msg.INVALID_ARGUMENT, f"{e.name} needs an array element")
             rest = "".join(", " + ("None" if a is None else self.expr(a)) for a in e.args[1:])
             return f"F[{e.name!r}](rt, {self.array_ref(first)}{rest})"
         if e.name in NAME_ARGUMENTS:
@@ -141,8 +147,7 @@ class LibraryStatements:
                     else "None" if a is None else self.expr(a) for a in e.args]
             return f"F[{e.name!r}](rt{''.join(', ' + a for a in args)})"
         if not e.args or not isinstance(e.args[0], ast.Var):
-            raise ProgramError(msg.message(msg.INVALID_ARGUMENT) + f" {e.name} needs a variable",
-                               msg.INVALID_ARGUMENT)
+            raise self.error(self.current, msg.INVALID_ARGUMENT, f"{e.name} needs a variable")
         result = self.fresh("wb")
         args = ", ".join("None" if a is None else self.expr(a) for a in e.args)
         return f"({result} := F[{e.name!r}](rt, {args}), {self.assign_expr(e.args[0], f'{result}[1]')})[0][0]"

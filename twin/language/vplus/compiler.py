@@ -40,7 +40,7 @@ from ...errors import ProgramError
 from . import ast
 from . import messages as msg
 from .compile_library import LIBRARY_CALLS, LibraryStatements
-from .keywords import FUNCTIONS, INSTRUCTIONS, STRING_FUNCTIONS
+from .keywords import FUNCTIONS, INSTRUCTIONS, STRING_FUNCTIONS, arity, called_bare
 from .values import single
 from .parser import normalize_name
 
@@ -150,6 +150,7 @@ class _Op:
     statement: ast.Statement | None = None
     target: int = -1  # mark id
     condition: str = ""  # for "branch": jump when this Python condition holds
+    waits_on: ast.Expr | None = None  # for "branch": the V+ condition, for its GETCs
     emit: object = None  # for "code": callable(depth) that emits lines
     loops: tuple = ()  # the loop stack a "stmt" is compiled under
 
@@ -198,8 +199,11 @@ class ProgramCompiler(LibraryStatements):
     # ---------------------------------------------------------------- program
     def compile(self) -> CompiledProgram:
         p = self.program
+        header = ast.Statement(line=p.line, column=1, step=1)
         for param in p.params:
-            self.check_name(param, ast.Statement(line=p.line, column=1, step=1))
+            self.check_name(param, header)
+            if self.key(param) in self.scope.auto:
+                raise self.error(header, msg.SYNTAX_ERROR, f"parameter {param.name} named twice")
             self.scope.auto.add(self.key(param))
         self.collect_declarations(p.body)
         self.emit(0, "def program(rt, _args):")
@@ -292,10 +296,10 @@ class ProgramCompiler(LibraryStatements):
 
     @staticmethod
     def reserved(var: ast.Var) -> bool:
-        """A function keyword: V+ rejects it as a variable name ("pi (reserved
-        word)", [000] L3778-3800)."""
+        """A function keyword written without arguments: V+ rejects it as a
+        variable name ("pi (reserved word)", [000] L3778-3800)."""
         name = var.name.upper()
-        return name in STRING_FUNCTIONS if name.startswith("$") else name in FUNCTIONS or name in _TASK_FUNCTIONS
+        return called_bare(name) or _TASK_FUNCTIONS.get(name, (None, 1))[1] == 0
 
     def check_name(self, var: ast.Var, statement: ast.Statement | None) -> None:
         if self.reserved(var):
@@ -328,11 +332,7 @@ class ProgramCompiler(LibraryStatements):
         if isinstance(e, ast.Str):
             return repr(e.value)
         if isinstance(e, ast.Var):
-            if e.indices is None and e.name.upper() in _TASK_FUNCTIONS:
-                return self.call(ast.Call(e.name.upper(), []))
-            if e.indices is None and e.name.upper() in FUNCTIONS and not e.name.startswith("#"):
-                return self.call(ast.Call(e.name.upper(), []))
-            if e.indices is None and e.name.upper() in STRING_FUNCTIONS:
+            if e.indices is None and self.reserved(e):  # PI, TRUE, HERE, #PHERE, TASK...
                 return self.call(ast.Call(e.name.upper(), []))
             return self.read(e)
         if isinstance(e, ast.Call):
@@ -377,6 +377,8 @@ class ProgramCompiler(LibraryStatements):
 
     def condition(self, e: ast.Expr) -> str:
         """An expression as a Python truth value (V+: nonzero is true)."""
+        if is_string(e):  # IF $s THEN, NOT "a": a string is not a truth value
+            raise self.error(self.current, msg.WRONG_TYPE, "a string where a condition is needed")
         if isinstance(e, ast.Binary):
             if e.op in _RELATIONAL:
                 return self.relation(e)
@@ -401,13 +403,15 @@ class ProgramCompiler(LibraryStatements):
             return self.library_call(e)  # $DECODE, TAS, PARAMETER(name): see compile_library.py
         table = STRING_FUNCTIONS if e.name.startswith("$") else FUNCTIONS
         if e.name not in table:
-            raise ProgramError(f"{msg.message(msg.UNDEFINED_PROGRAM)} {e.name}", msg.UNDEFINED_PROGRAM)
+            raise self.error(self.current, msg.UNDEFINED_PROGRAM, e.name)
+        fewest, most = arity(table[e.name])
+        self.argument_count(e.name, e.args, fewest, most)
         args = ", ".join("None" if a is None else self.expr(a) for a in e.args)
         return f"F[{e.name!r}](rt{', ' if args else ''}{args})"
 
     def defined(self, e: ast.Call) -> str:
         if len(e.args) != 1 or not isinstance(e.args[0], ast.Var):
-            raise ProgramError(msg.message(msg.INVALID_ARGUMENT) + " DEFINED", msg.INVALID_ARGUMENT)
+            raise self.error(self.current, msg.INVALID_ARGUMENT, "DEFINED takes one variable")
         var = e.args[0]
         key = self.key(var)
         if key in self.scope.auto:
@@ -461,7 +465,8 @@ class ProgramCompiler(LibraryStatements):
         return f"_real({value})" if key in self.scope.doubles else f"_single({value})"
 
     def s_SetLocation(self, s: ast.SetLocation, depth: int) -> None:
-        self.assign(s.target, f"_location({self.expr(s.value)})", depth)
+        check = "_precision_point" if s.target.name.startswith("#") else "_location"
+        self.assign(s.target, f"{check}({self.expr(s.value)})", depth)
 
     def s_Declare(self, s: ast.Declare, depth: int) -> None:
         for var, dims in s.names:
@@ -483,6 +488,7 @@ class ProgramCompiler(LibraryStatements):
         self.count -= 1
 
     def s_If(self, s: ast.If, depth: int) -> None:
+        self.wait_for_input(s.condition, depth)
         self.emit(depth, f"if {self.condition(s.condition)}:")
         self.block(s.body, depth + 1)
         if s.orelse:
@@ -528,7 +534,10 @@ class ProgramCompiler(LibraryStatements):
         self.loop_body(s.body, tail, depth + 1)
 
     def s_While(self, s: ast.While, depth: int) -> None:
-        self.emit(depth, f"while {self.condition(s.condition)}:")
+        # The test is the loop's first step, where a GETC in it waits.
+        self.emit(depth, "while True:")
+        self.wait_for_input(s.condition, depth + 1)
+        self.emit(depth + 1, f"if not {self.condition(s.condition)}: break")
 
         def tail(d: int) -> None:
             self.current = s
@@ -541,6 +550,7 @@ class ProgramCompiler(LibraryStatements):
 
         def tail(d: int) -> None:
             self.current = s
+            self.wait_for_input(s.condition, d)
             self.emit(d, f"if {self.condition(s.condition)}: break")
             self.slice_check(d)
 
@@ -561,9 +571,13 @@ class ProgramCompiler(LibraryStatements):
             loop[1](depth)
             self.emit(depth, "continue")
 
+    def case_subject(self, s: ast.Case, subject: str, depth: int) -> None:
+        self.wait_for_input(s.subject, depth)
+        self.emit(depth, f"{subject} = _real({self.expr(s.subject)})")  # CASE takes a real ([000] L4775)
+
     def s_Case(self, s: ast.Case, depth: int) -> None:
         subject = self.fresh("case")
-        self.emit(depth, f"{subject} = _real({self.expr(s.subject)})")  # CASE takes a real ([000] L4775)
+        self.case_subject(s, subject, depth)
         keyword = "if"
         for values, body in s.cases:
             tests = " or ".join(f"{subject} == {self.expr(v)}" for v in values)
@@ -608,7 +622,8 @@ class ProgramCompiler(LibraryStatements):
             if isinstance(s, ast.Goto):
                 ops.append(_Op("jump", s, target=self.label_mark(s.target)))
             elif isinstance(s, ast.IfGoto):
-                ops.append(_Op("branch", s, target=self.label_mark(s.target), condition=self.condition(s.condition)))
+                ops.append(_Op("branch", s, target=self.label_mark(s.target), condition=self.condition(s.condition),
+                               waits_on=s.condition))
             elif _loop_control(s) is not None:
                 ops.append(self.loop_jump(s))
             elif self.needs_jumps(s):
@@ -630,7 +645,8 @@ class ProgramCompiler(LibraryStatements):
 
     def lower_If(self, s: ast.If, ops: list[_Op]) -> None:
         orelse, end = self.mark(), self.mark()
-        ops.append(_Op("branch", s, target=orelse, condition=f"not {self.condition(s.condition)}"))
+        ops.append(_Op("branch", s, target=orelse, condition=f"not {self.condition(s.condition)}",
+                       waits_on=s.condition))
         self.lower(s.body, ops)
         ops.append(_Op("jump", s, target=end))
         ops.append(_Op("mark", s, target=orelse))
@@ -646,7 +662,8 @@ class ProgramCompiler(LibraryStatements):
     def lower_While(self, s: ast.While, ops: list[_Op]) -> None:
         top, next_, end = self.mark(), self.mark(), self.mark()
         ops.append(_Op("mark", s, target=top))
-        ops.append(_Op("branch", s, target=end, condition=f"not {self.condition(s.condition)}"))
+        ops.append(_Op("branch", s, target=end, condition=f"not {self.condition(s.condition)}",
+                       waits_on=s.condition))
         self.lower_loop(s, ops, next_, end)
         ops.append(_Op("jump", s, target=top))
         ops.append(_Op("mark", s, target=end))
@@ -655,7 +672,8 @@ class ProgramCompiler(LibraryStatements):
         top, test, end = self.mark(), self.mark(), self.mark()
         ops.append(_Op("mark", s, target=top))
         self.lower_loop(s, ops, test, end)
-        ops.append(_Op("branch", s, target=top, condition=f"not {self.condition(s.condition)}"))
+        ops.append(_Op("branch", s, target=top, condition=f"not {self.condition(s.condition)}",
+                       waits_on=s.condition))
         ops.append(_Op("mark", s, target=end))
 
     def lower_For(self, s: ast.For, ops: list[_Op]) -> None:
@@ -677,7 +695,7 @@ class ProgramCompiler(LibraryStatements):
 
     def lower_Case(self, s: ast.Case, ops: list[_Op]) -> None:
         subject, end = self.fresh("case"), self.mark()
-        ops.append(_Op("code", s, emit=lambda depth: self.emit(depth, f"{subject} = _real({self.expr(s.subject)})")))
+        ops.append(_Op("code", s, emit=lambda depth: self.case_subject(s, subject, depth)))
         entries = []
         for values, body in s.cases:
             entry = self.mark()
@@ -739,6 +757,7 @@ class ProgramCompiler(LibraryStatements):
                 self.jump(index, op.target, depth)
                 return
             else:
+                self.wait_for_input(op.waits_on, depth)
                 self.emit(depth, f"if {op.condition}:")
                 self.jump(index, op.target, depth + 1)
         if index + 1 < len(blocks):
@@ -754,8 +773,17 @@ class ProgramCompiler(LibraryStatements):
         self.emit(depth, "continue")
 
 
+    def by_reference(self, arg: ast.Expr | None) -> bool:
+        """A CALL argument the callee writes back: a variable, an element or a
+        whole array, not `(x)` or another expression ([000] L1169-1200)."""
+        return (isinstance(arg, ast.Var) and not arg.parenthesized and (arg.indices is None or arg.indices)
+                and not self.reserved(arg))  # TRUE, PI...: a value, not a variable
+
     def s_CallProgram(self, s: ast.CallProgram, depth: int) -> None:
-        args = ", ".join("None" if a is None else self.expr(a) for a in s.args)
+        # A variable passed by reference may still be undefined: the callee
+        # sees an undefined parameter (DEFINED() is false) and may define it.
+        args = ", ".join("None" if a is None else self.peek(a) if self.by_reference(a) and not a.indices
+                         else self.expr(a) for a in s.args)
         if s.name is not None:
             target = repr(s.name)
         else:
@@ -763,27 +791,31 @@ class ProgramCompiler(LibraryStatements):
         results = self.fresh("ret")
         self.emit(depth, f"{results} = yield from rt.call({target}, [{args}])")
         for i, arg in enumerate(s.args):
-            if (isinstance(arg, ast.Var) and not arg.parenthesized and (arg.indices is None or arg.indices)
-                    and not self.reserved(arg)):  # TRUE, PI...: a value, not a variable
+            if self.by_reference(arg):
                 self.emit(depth, f"if {results}[{i}] is not None:")
                 self.assign(arg, f"{results}[{i}]", depth + 1)
 
     def s_TypeOut(self, s: ast.TypeOut, depth: int) -> None:
-        items = []
-        for item in s.items:
-            if isinstance(item, ast.Format):
-                items.append(f"_fmt({item.code!r}, {item.width!r}, {item.decimals!r})")
-            else:
-                items.append(self.expr(item))
+        items = [self.io_item(item) for item in s.items]
         self.emit(depth, f"rt.type_out(({', '.join(items)}{',' if len(items) == 1 else ''}))")
 
     def s_Prompt(self, s: ast.Prompt, depth: int) -> None:
+        """PROMPT text, $s takes the typed line; PROMPT text, x, y, ... the
+        numbers typed, separated by commas or spaces (docs/vplus.md)."""
         text = self.fresh("in")
         self.emit(depth, f"{text} = rt.prompt({self.expr(s.text)})")
-        if s.target.name.startswith("$"):
-            self.assign(s.target, text, depth)
-        else:
-            self.assign(s.target, self.real(s.target, f"rt.prompt_number({text})"), depth)
+        if any(t.name.startswith("$") for t in s.targets):
+            if len(s.targets) > 1:
+                raise self.error(s, msg.WRONG_TYPE, "PROMPT takes one string variable or real variables")
+            self.assign(s.targets[0], text, depth)
+            return
+        if not s.targets:
+            return
+        numbers = self.fresh("num")
+        self.emit(depth, f"{numbers} = rt.prompt_numbers({text}, {len(s.targets)})")
+        for i, target in enumerate(s.targets):
+            self.emit(depth, f"if {numbers}[{i}] is not None:")
+            self.assign(target, self.real(target, f"{numbers}[{i}]"), depth + 1)
 
     def s_Parameter(self, s: ast.Parameter, depth: int) -> None:
         index = self.expr(s.index) if s.index is not None else "None"
@@ -829,10 +861,15 @@ class ProgramCompiler(LibraryStatements):
         spec = INSTRUCTIONS.get(name)
         if spec is None:
             raise self.error(s, msg.UNKNOWN_KEYWORD, name)
-        if spec.names:
-            args = ", ".join(repr(a.name.upper()) for a in s.args if isinstance(a, ast.Var))
-        else:
-            args = ", ".join("None" if a is None else self.expr(a) for a in s.args)
+        if not spec.names:
+            fewest, most = arity(spec.function)
+            self.argument_count(name, s.args, fewest, most)
+        if spec.names:  # CPON ALWAYS: ALWAYS is one of the names
+            args = ", ".join([*(repr(a.name.upper()) for a in s.args if isinstance(a, ast.Var)),
+                              *(["'ALWAYS'"] if s.always else [])])
+        else:  # DURATION 0.5 ALWAYS
+            args = ", ".join(["None" if a is None else self.expr(a) for a in s.args]
+                             + (["always=True"] if s.always else []))
         call = f"I[{name!r}](rt{', ' if args else ''}{args})"
         self.emit(depth, f"yield from {call}" if spec.waits else call)
 

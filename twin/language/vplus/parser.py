@@ -198,7 +198,7 @@ class _ToAst(Transformer):
         return ast.Goto(int(children[0]), **_pos(meta))
 
     def call_statement(self, meta, children):
-        return ast.CallProgram(normalize_name(str(children[0])), children[1], **_pos(meta))
+        return ast.CallProgram(normalize_name(str(children[0])), children[1] or [], **_pos(meta))
 
     def calls_statement(self, meta, children):
         return ast.CallProgram(None, children[1], name_expr=children[0], **_pos(meta))
@@ -218,7 +218,7 @@ class _ToAst(Transformer):
         return ast.Format(code, width, decimals)
 
     def prompt_statement(self, meta, children):
-        return ast.Prompt(children[0], children[1], **_pos(meta))
+        return ast.Prompt(children[0], list(children[1:]), **_pos(meta))
 
     def parameter_statement(self, meta, children):
         name, index, value = children
@@ -233,10 +233,11 @@ class _ToAst(Transformer):
 
     def execute_statement(self, meta, children):
         task, name, args, options = children
-        return ast.ExecuteProgram(task, normalize_name(str(name)), args, options or [], **_pos(meta))
+        return ast.ExecuteProgram(task, normalize_name(str(name)), args or [], options or [], **_pos(meta))
 
     def instruction(self, meta, children):
-        return ast.Instruction(str(children[0]).upper(), children[1], **_pos(meta))
+        name, args, always = children
+        return ast.Instruction(str(name).upper(), args, always is not None, **_pos(meta))
 
     # ---- I/O and keyed statements (lang-library)
     def io_statement(self, meta, children):
@@ -279,9 +280,11 @@ def _syntax_error(err: UnexpectedInput, text: str, file: str) -> ProgramError:
         line = len(lines)
         column = 1
     source = lines[line - 1] if 0 < line <= len(lines) else ""
-    if isinstance(err, UnexpectedToken):
-        got = str(err.token) or "end of line"
-        detail = f"unexpected {got.strip()!r}"
+    if isinstance(err, UnexpectedToken) and err.token.type == "$END":
+        detail = "unexpected end of file (a .PROGRAM or data section without its .END)"
+    elif isinstance(err, UnexpectedToken):
+        got = str(err.token).strip()  # a line end is blank
+        detail = f"unexpected {got!r}" if got else "unexpected end of line"
     elif isinstance(err, UnexpectedCharacters):
         detail = f"unexpected character {source[column - 1:column]!r}" if column else "unexpected character"
     else:

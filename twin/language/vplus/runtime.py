@@ -9,6 +9,7 @@ the controller's message, and stop the task as the controller would.
 
 from __future__ import annotations
 
+import re
 import sys
 import traceback
 from dataclasses import dataclass, field
@@ -118,6 +119,10 @@ class VPlusSystem:
         self.sources[module.file] = module.lines
         names = []
         for program in module.programs:
+            if program.name in names:  # one file cannot hold a program twice
+                raise ProgramError(f"{msg.message(msg.SYNTAX_ERROR)} program {program.name} defined twice",
+                                   msg.SYNTAX_ERROR, file=program.file, line=program.line, column=1,
+                                   text=self.source_line(program.file, program.line))
             try:
                 compiled = compile_program(program)
             except ProgramError as err:
@@ -218,7 +223,9 @@ class Task(TaskControl):
     def robot(self):
         """The robot; a task that does not hold it may read it but not move it."""
         robot = self.system.robot
-        if robot is None or self.system.robot_holder is self:
+        if robot is None:  # a system made without a cell (the interpreter alone)
+            raise values.fail(msg.DEVICE_NOT_READY, "no robot")
+        if self.system.robot_holder is self:
             return robot
         return _RobotOfAnotherTask(robot, self)
 
@@ -325,8 +332,18 @@ class Task(TaskControl):
             raise values.fail(msg.UNEXPECTED_EOF)
         return line
 
-    def prompt_number(self, text: str) -> float:
-        return typed_number(text)
+    def prompt_numbers(self, text: str, count: int) -> list[float | None]:
+        """The numbers typed for `count` real variables: one entry is one
+        number ("11+1" is *Unexpected text at end of line*); several are
+        separated by commas or spaces.  More numbers than variables is
+        unexpected text; a variable with no number typed is left as it was."""
+        if count == 1:
+            return [typed_number(text)]
+        fields = [f for f in re.split(r"[\s,]+", text.strip()) if f]
+        if len(fields) > count:
+            raise values.fail(msg.UNEXPECTED_TEXT, repr(text))
+        numbers: list[float | None] = [typed_number(f) for f in fields]
+        return numbers + [None] * (count - len(fields))
 
     # ------------------------------------------------------------ settings
     def set_parameter(self, name: str, index, value) -> None:

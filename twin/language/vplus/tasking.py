@@ -169,7 +169,7 @@ class TaskControl:
             if level != reaction.level and level == (reaction.signal > 0):
                 reaction.triggered = True
                 self.event = True
-                if reaction.immediate and self.robot is not None:
+                if reaction.immediate and self.system.robot is not None:
                     self.system.robot.stop()  # REACTI: BRAKE at once
             reaction.level = level
 

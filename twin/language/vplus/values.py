@@ -128,6 +128,13 @@ def _location(value) -> Location:
     return value
 
 
+def _precision_point(value) -> tuple:
+    """SET #p = ...: a precision point is a tuple of joint values."""
+    if not isinstance(value, tuple):
+        raise fail(msg.WRONG_TYPE, "precision point expected")
+    return value
+
+
 def _compound(a, b) -> Location:
     return _location(a) * _location(b)
 

@@ -15,6 +15,8 @@ robot and signal interfaces, which both languages share.
 
 from __future__ import annotations
 
+import inspect
+import math
 from dataclasses import dataclass
 from typing import Callable
 
@@ -42,6 +44,32 @@ STRING_FUNCTIONS: dict[str, Callable] = {}
 WRITES_FIRST_ARGUMENT: set[str] = set()
 # Functions whose arguments are names, not expressions: PARAMETER(HAND.TIME), SWITCH(CP).
 NAME_ARGUMENTS: set[str] = set()
+
+
+def called_bare(name: str) -> bool:
+    """Whether a function keyword can be written without an argument list (PI,
+    TRUE, HERE, #PHERE): such a name always means the function, so it cannot
+    name a variable.  A function that needs an argument (SIG(n), IOSTAT(lun),
+    ERROR(task)) is always followed by "(", and its name may name a variable:
+    the manual's own `error = IOSTAT(dlun)` (docs/vplus.md, "Reserved words")."""
+    fn = (STRING_FUNCTIONS if name.startswith("$") else FUNCTIONS).get(name)
+    if fn is None:
+        return False
+    return len(inspect.signature(fn).parameters) == 1  # rt alone
+
+
+def arity(fn: Callable) -> tuple[int, float]:
+    """The fewest and most arguments a keyword takes after the task (rt):
+    a wrong count is a load-time error, as the controller's editor checks
+    each line against its keyword table."""
+    fewest, most = 0, 0.0
+    for p in list(inspect.signature(fn).parameters.values())[1:]:
+        if p.kind is p.VAR_POSITIONAL:
+            most = math.inf
+        elif p.kind is not p.KEYWORD_ONLY and p.name != "always":  # DURATION t ALWAYS: not an argument
+            most += 1
+            fewest += p.default is p.empty
+    return fewest, most
 
 
 def instruction(name: str, waits: bool = False, names: bool = False, targets: bool = False,

@@ -50,6 +50,18 @@ def _dest(rt):
     return rt.robot.destination()
 
 
+@function("#PHERE")
+def _phere(rt):
+    """#PHERE: where the robot is now, as a precision point (measured joints)."""
+    return rt.robot.to_user_joints(rt.robot.joints())
+
+
+@function("#PDEST")
+def _pdest(rt):
+    """#PDEST: where the robot was last told to go, as a precision point."""
+    return rt.robot.to_user_joints(rt.robot.destination_joints())
+
+
 @function("DX")
 def _dx(rt, loc):
     return location_arg(loc).x

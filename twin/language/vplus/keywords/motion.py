@@ -3,8 +3,8 @@
 Locations are transformations (`Location`) or precision points (tuples of joint values,
 degrees and mm).  The CP switch (ENABLE/DISABLE CP) is read when a motion is issued.
 Modifiers that take ALWAYS here are written with it as a keyword name (`CPOFF ALWAYS`,
-`SINGLE ALWAYS`, `OVERLAP ALWAYS`); `DURATION t ALWAYS` needs a grammar rule that does
-not exist yet, so DURATION applies to the next motion only (docs/motion.md).
+`SINGLE ALWAYS`, `OVERLAP ALWAYS`); a value setting takes it as a keyword argument
+(`DURATION t ALWAYS`).
 """
 
 from __future__ import annotations
@@ -140,8 +140,9 @@ def _accel_value(rt, select=1):
 
 
 @instruction("DURATION")
-def _duration(rt, seconds):
-    rt.robot.set_duration(float(seconds))
+def _duration(rt, seconds, always=False):
+    """DURATION t [ALWAYS]: the next motion, or every motion, takes at least t seconds."""
+    rt.robot.set_duration(float(seconds), always)
 
 
 @instruction("CPON", names=True)

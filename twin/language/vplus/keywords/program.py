@@ -1,4 +1,6 @@
-"""Program control and errors: STOP, HALT, WAIT, ERROR, $ERROR, TASK."""
+"""Program control and errors: STOP, HALT, ERROR, $ERROR, SPEED().
+
+WAIT and TASK() are compiled by the compiler itself (compiler.py, tasking.py)."""
 
 from __future__ import annotations
 
@@ -17,11 +19,6 @@ def _halt(rt):
     rt.halt()
 
 
-@instruction("WAIT", waits=True)
-def _wait(rt):
-    yield rt.SLICE  # bare WAIT: sleep until the next major cycle
-
-
 @function("$ERROR")
 def _error_text(rt, code):
     """$ERROR(code): the controller's message for an error code."""
@@ -37,11 +34,6 @@ def _error_code(rt, source=None, select=None):
         if task.number == number:
             return float(task.last_error or 0)
     return 0.0
-
-
-@function("TASK")
-def _task(rt, *args):
-    return float(rt.number)
 
 
 @function("SPEED")

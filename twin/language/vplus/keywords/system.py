@@ -3,7 +3,7 @@
 "System Parameters"; eV+ guide, same tables).
 
 Signals are numbered as on the controller: outputs 1-512, inputs 1001-1512,
-soft signals 2001-2512 (controller/io.py); a negative number means "off".
+soft signals 2001-2512 and 3001-3004 (controller/io.py); a negative number means "off".
 """
 
 from __future__ import annotations
@@ -18,6 +18,30 @@ from . import function, instruction
 TICKS_PER_SECOND = 1000.0  # TPS: the scheduler's 1 ms time slice
 SYSTEM_ID = "twin V+ emulation"  # $ID: the guides give no layout
 CALENDAR_START = datetime(2000, 1, 1)  # what $TIME shows at simulated time 0
+
+
+# ---- device selection: the cell has one robot, unit 1
+ROBOT_UNITS = 1
+
+
+def _robot_device(device: str) -> None:
+    if device != "ROBOT":  # VISION, BELT... select hardware the twin does not have
+        raise fail(msg.DEVICE_NOT_READY, f"SELECT {device}")
+
+
+@instruction("SELECT", names=True)
+def _select(rt, unit, device):
+    """SELECT ROBOT = n: the robot the task's motion keywords drive ([000] L7020)."""
+    _robot_device(device)
+    if not 1 <= to_int(unit) <= ROBOT_UNITS:
+        raise fail(msg.ILLEGAL_VALUE, f"robot {to_int(unit)}: the cell has {ROBOT_UNITS}")
+
+
+@function("SELECT", names=True)
+def _selected(rt, device):
+    """SELECT(ROBOT): the unit the task has selected ([000] L5539, L7023)."""
+    _robot_device(device)
+    return 1.0
 
 
 # ---- switches and parameters
