@@ -776,3 +776,18 @@ def test_parentheses_of_an_empty_argument_list_may_be_left_out():
 .END"""
     out = output_of(text)
     assert sorted(out.splitlines()) == ["told", "worker in task 2", "worker in task 3"]
+
+
+def test_loops_nested_deeper_than_python_allows_still_run():
+    """Python nests at most 20 loop and try blocks; a V+ program may nest its
+    loops deeper: such a program is compiled to one flat jump table."""
+    depth = 24
+    loops = "FOR i0 = 1 TO 3\n" + "".join(f"FOR i{k} = 1 TO 1\n" for k in range(1, depth))
+    text = f".PROGRAM deep()\nn = 0\n{loops}IF i0 <> 2 THEN\nn = n + i0\nEND\n" + "END\n" * depth
+    assert output_of(text + "TYPE n\n.END\n") == "4\n"
+
+
+def test_a_compile_error_inside_a_goto_program_is_located():
+    """A program with GOTO is lowered to jumps; its load errors still name the step."""
+    error = failure(program('10 IF $x THEN\nGOTO 10\nEND'))
+    assert error.code == msg.WRONG_TYPE and error.line == 3

@@ -163,8 +163,9 @@ class _Scope:
 
 
 class ProgramCompiler(LibraryStatements):
-    def __init__(self, program: ast.Program):
+    def __init__(self, program: ast.Program, flat: bool = False):
         self.program = program
+        self.flat = flat  # every block lowered to jumps (see compile_program)
         self.lines: list[str] = []
         self.line_map: dict[int, ast.Statement] = {}
         self.scope = _Scope()
@@ -221,7 +222,7 @@ class ProgramCompiler(LibraryStatements):
             self.emit(1, f"if len(_args) > {i} and _args[{i}] is not None:")
             self.emit(2, f"{local} = _argument(_args[{i}], {kind!r}, {param.name!r})")
         self.targets = self.goto_targets(p.body)
-        if any(_forces_jumps(t, self.targets) for t in _walk(p.body)):
+        if self.flat or any(_forces_jumps(t, self.targets) for t in _walk(p.body)):
             self.jump_table(p.body, 1)
         else:
             self.block(p.body, 1)
@@ -608,7 +609,7 @@ class ProgramCompiler(LibraryStatements):
 
     def needs_jumps(self, s: ast.Statement) -> bool:
         """Does a block statement hold something only jumps can express?"""
-        return any(_forces_jumps(t, self.targets) for body in _bodies(s) for t in _walk(body))
+        return (self.flat and bool(_bodies(s))) or any(_forces_jumps(t, self.targets) for body in _bodies(s) for t in _walk(body))
 
     def mark(self) -> int:
         self.marks += 1
@@ -617,6 +618,7 @@ class ProgramCompiler(LibraryStatements):
     def lower(self, body: list[ast.Statement], ops: list[_Op]) -> None:
         """Append the ops of `body`: statements, marks and jumps."""
         for s in body:
+            self.current = s  # what a compile error met while lowering names
             if s.label in self.targets:
                 ops.append(_Op("mark", s, target=self.label_mark(s.label)))
             if isinstance(s, ast.Goto):
@@ -920,5 +922,7 @@ class ProgramCompiler(LibraryStatements):
                          f"{', ' if options else ''}{options})")
 
 
-def compile_program(program: ast.Program) -> CompiledProgram:
-    return ProgramCompiler(program).compile()
+def compile_program(program: ast.Program, flat: bool = False) -> CompiledProgram:
+    """`flat`: lower every IF/FOR/WHILE/DO/CASE to jumps, for programs whose
+    loops nest deeper than Python allows its own blocks (20, try included)."""
+    return ProgramCompiler(program, flat).compile()

@@ -129,7 +129,13 @@ class VPlusSystem:
                 err.located(file=program.file, program=program.name)
                 raise err.located(text=self.source_line(program.file, err.line or 0)) from None
             namespace = dict(_NAMESPACE)
-            code = compile(compiled.source, f"<vplus:{program.name}>", "exec")
+            try:
+                code = compile(compiled.source, f"<vplus:{program.name}>", "exec")
+            except SyntaxError as err:
+                if "too many statically nested blocks" not in str(err):
+                    raise
+                compiled = compile_program(program, flat=True)  # one loop, no nesting
+                code = compile(compiled.source, f"<vplus:{program.name}>", "exec")
             exec(code, namespace)
             compiled.function = namespace["program"]
             self.programs[program.name] = compiled
