@@ -925,4 +925,8 @@ class ProgramCompiler(LibraryStatements):
 def compile_program(program: ast.Program, flat: bool = False) -> CompiledProgram:
     """`flat`: lower every IF/FOR/WHILE/DO/CASE to jumps, for programs whose
     loops nest deeper than Python allows its own blocks (20, try included)."""
-    return ProgramCompiler(program, flat).compile()
+    compiler = ProgramCompiler(program, flat)
+    try:
+        return compiler.compile()
+    except RecursionError:  # an expression nested deeper than this compiler recurses
+        raise compiler.error(compiler.current, msg.SYNTAX_ERROR, "expression too complicated") from None
