@@ -609,7 +609,9 @@ class ProgramCompiler(LibraryStatements):
 
     def needs_jumps(self, s: ast.Statement) -> bool:
         """Does a block statement hold something only jumps can express?"""
-        return (self.flat and bool(_bodies(s))) or any(_forces_jumps(t, self.targets) for body in _bodies(s) for t in _walk(body))
+        if self.flat:
+            return bool(_bodies(s))
+        return any(_forces_jumps(t, self.targets) for body in _bodies(s) for t in _walk(body))
 
     def mark(self) -> int:
         self.marks += 1
@@ -776,8 +778,9 @@ class ProgramCompiler(LibraryStatements):
 
 
     def by_reference(self, arg: ast.Expr | None) -> bool:
-        """A CALL argument the callee writes back: a variable, an element or a
-        whole array, not `(x)` or another expression ([000] L1169-1200)."""
+        """A CALL argument the callee writes back: a variable or an array
+        element, not `(x)` or another expression ([000] L1169-1200); a whole
+        array `a[]` is passed as the array itself."""
         return (isinstance(arg, ast.Var) and not arg.parenthesized and (arg.indices is None or arg.indices)
                 and not self.reserved(arg))  # TRUE, PI...: a value, not a variable
 
