@@ -564,7 +564,8 @@ MALFORMED = [
     ("DURATION 1 ALWAYS", msg.DEVICE_NOT_READY, 3),
     ("SIGNAL 1, 2, 3004, -3005", msg.ILLEGAL_SIGNAL, 3),
     ("CALL bad(1)", msg.INVALID_ARGUMENT, 3),
-    ("timer = TIMER(1)", msg.INVALID_ARGUMENT, 3),  # TIMER n = value: the instruction
+    ("timer = TIMER(1)", msg.INVALID_ARGUMENT, 3),
+    ("DELAY 1 ALWAYS", msg.INVALID_ARGUMENT, 3),  # TIMER n = value: the instruction
     ("x = " + "+".join(["1"] * 600), msg.SYNTAX_ERROR, 3),  # too long for the compiler's recursion
     ("x = " + "NOT " * 300 + "1", msg.SYNTAX_ERROR, 3),  # too deep for Python's parser
 ]

@@ -33,6 +33,7 @@ basic block, and programs without GOTO keep the structured form entirely.
 
 from __future__ import annotations
 
+import inspect
 import math
 from dataclasses import dataclass, field
 
@@ -869,6 +870,8 @@ class ProgramCompiler(LibraryStatements):
         if not spec.names:
             fewest, most = arity(spec.function)
             self.argument_count(name, s.args, fewest, most)
+            if s.always and "always" not in inspect.signature(spec.function).parameters:
+                raise self.error(s, msg.INVALID_ARGUMENT, f"{name} does not take ALWAYS")
         if spec.names:  # CPON ALWAYS: ALWAYS is one of the names
             args = ", ".join([*(repr(a.name.upper()) for a in s.args if isinstance(a, ast.Var)),
                               *(["'ALWAYS'"] if s.always else [])])
