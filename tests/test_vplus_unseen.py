@@ -10,6 +10,8 @@ programs: every one must give a located V+ error, never a Python exception.
 
 from __future__ import annotations
 
+import random
+
 import pytest
 
 from twin.errors import ProgramError
@@ -564,7 +566,10 @@ MALFORMED = [
     ("DURATION 1 ALWAYS", msg.DEVICE_NOT_READY, 3),
     ("SIGNAL 1, 2, 3004, -3005", msg.ILLEGAL_SIGNAL, 3),
     ("CALL bad(1)", msg.INVALID_ARGUMENT, 3),
-    ("timer = TIMER(1)", msg.INVALID_ARGUMENT, 3),  # TIMER n = value: the instruction
+    ("timer = TIMER(1)", msg.INVALID_ARGUMENT, 3),
+    ("DELAY 1 ALWAYS", msg.INVALID_ARGUMENT, 3),  # TIMER n = value: the instruction
+    ("x = " + "+".join(["1"] * 600), msg.SYNTAX_ERROR, 3),  # too long for the compiler's recursion
+    ("x = " + "NOT " * 300 + "1", msg.SYNTAX_ERROR, 3),  # too deep for Python's parser
 ]
 
 
@@ -776,3 +781,52 @@ def test_parentheses_of_an_empty_argument_list_may_be_left_out():
 .END"""
     out = output_of(text)
     assert sorted(out.splitlines()) == ["told", "worker in task 2", "worker in task 3"]
+
+
+def test_loops_nested_deeper_than_python_allows_still_run():
+    """Python nests at most 20 loop and try blocks; a V+ program may nest its
+    loops deeper: such a program is compiled to one flat jump table."""
+    depth = 24
+    loops = "FOR i0 = 1 TO 3\n" + "".join(f"FOR i{k} = 1 TO 1\n" for k in range(1, depth))
+    text = f".PROGRAM deep()\nn = 0\n{loops}IF i0 <> 2 THEN\nn = n + i0\nEND\n" + "END\n" * depth
+    assert output_of(text + "TYPE n\n.END\n") == "4\n"
+
+
+def test_a_compile_error_inside_a_goto_program_is_located():
+    """A program with GOTO is lowered to jumps; its load errors still name the step."""
+    error = failure(program('10 IF $x THEN\nGOTO 10\nEND'))
+    assert error.code == msg.WRONG_TYPE and error.line == 3
+
+
+def mutants(count: int, seed: int = 3):
+    """The programs above with a few random cuts and insertions of V+ words
+    and punctuation: what a slip of the keyboard makes of them."""
+    rng = random.Random(seed)
+    sources = [PALLET, STATES, BARCODE, GUARD, CONVEYOR, TRAPPED, REPORT, CHAIN, HANDSHAKE, DATA, CALC]
+    words = ["(", ")", ",", "=", "[", "]", '"', "$", "#", ":", ";", "END", "IF", "THEN", "ELSE", "GOTO",
+             "10", "-", "/", "^H", "'", "VALUE", "DO", "UNTIL", "CALL", "TYPE", "/I", "/F9.", ".END",
+             ".PROGRAM x()", "\n", "NOT", "AND", "1E99", "0", "SET", "AUTO a[", "WAIT", "REACT", "EXECUTE",
+             "READ (", "$MID(", "TIMER(", "FOR", "TO", "STEP", "CASE", "OF", "ANY", "ALWAYS", "PROMPT", "error"]
+    for _ in range(count):
+        text = list(rng.choice(sources))
+        for _ in range(rng.randint(1, 3)):
+            at = rng.randrange(len(text))
+            if rng.random() < 0.4:
+                del text[at:at + rng.randint(1, 6)]
+            else:
+                text[at:at] = list(f" {rng.choice(words)} ")
+        yield "".join(text)
+
+
+def test_mistyped_programs_never_raise_a_python_exception():
+    """200 mangled programs: each loads and runs, or stops with a located V+
+    error; none escapes as another Python exception."""
+    for text in mutants(200):
+        try:
+            system, task = run_vplus(text, max_cycles=40, stdin="1\n")
+        except ProgramError as error:
+            assert error.file == "test.pg" and error.line is not None and error.message.startswith("*"), error
+            continue
+        for each in [task, *system.tasks]:
+            if each.error is not None:
+                assert isinstance(each.error, ProgramError) and each.error.line is not None, each.error

@@ -33,6 +33,7 @@ basic block, and programs without GOTO keep the structured form entirely.
 
 from __future__ import annotations
 
+import inspect
 import math
 from dataclasses import dataclass, field
 
@@ -163,8 +164,9 @@ class _Scope:
 
 
 class ProgramCompiler(LibraryStatements):
-    def __init__(self, program: ast.Program):
+    def __init__(self, program: ast.Program, flat: bool = False):
         self.program = program
+        self.flat = flat  # every block lowered to jumps (see compile_program)
         self.lines: list[str] = []
         self.line_map: dict[int, ast.Statement] = {}
         self.scope = _Scope()
@@ -221,7 +223,7 @@ class ProgramCompiler(LibraryStatements):
             self.emit(1, f"if len(_args) > {i} and _args[{i}] is not None:")
             self.emit(2, f"{local} = _argument(_args[{i}], {kind!r}, {param.name!r})")
         self.targets = self.goto_targets(p.body)
-        if any(_forces_jumps(t, self.targets) for t in _walk(p.body)):
+        if self.flat or any(_forces_jumps(t, self.targets) for t in _walk(p.body)):
             self.jump_table(p.body, 1)
         else:
             self.block(p.body, 1)
@@ -608,6 +610,8 @@ class ProgramCompiler(LibraryStatements):
 
     def needs_jumps(self, s: ast.Statement) -> bool:
         """Does a block statement hold something only jumps can express?"""
+        if self.flat:
+            return bool(_bodies(s))
         return any(_forces_jumps(t, self.targets) for body in _bodies(s) for t in _walk(body))
 
     def mark(self) -> int:
@@ -617,6 +621,7 @@ class ProgramCompiler(LibraryStatements):
     def lower(self, body: list[ast.Statement], ops: list[_Op]) -> None:
         """Append the ops of `body`: statements, marks and jumps."""
         for s in body:
+            self.current = s  # what a compile error met while lowering names
             if s.label in self.targets:
                 ops.append(_Op("mark", s, target=self.label_mark(s.label)))
             if isinstance(s, ast.Goto):
@@ -774,8 +779,9 @@ class ProgramCompiler(LibraryStatements):
 
 
     def by_reference(self, arg: ast.Expr | None) -> bool:
-        """A CALL argument the callee writes back: a variable, an element or a
-        whole array, not `(x)` or another expression ([000] L1169-1200)."""
+        """A CALL argument the callee writes back: a variable or an array
+        element, not `(x)` or another expression ([000] L1169-1200); a whole
+        array `a[]` is passed as the array itself."""
         return (isinstance(arg, ast.Var) and not arg.parenthesized and (arg.indices is None or arg.indices)
                 and not self.reserved(arg))  # TRUE, PI...: a value, not a variable
 
@@ -864,6 +870,8 @@ class ProgramCompiler(LibraryStatements):
         if not spec.names:
             fewest, most = arity(spec.function)
             self.argument_count(name, s.args, fewest, most)
+            if s.always and "always" not in inspect.signature(spec.function).parameters:
+                raise self.error(s, msg.INVALID_ARGUMENT, f"{name} does not take ALWAYS")
         if spec.names:  # CPON ALWAYS: ALWAYS is one of the names
             args = ", ".join([*(repr(a.name.upper()) for a in s.args if isinstance(a, ast.Var)),
                               *(["'ALWAYS'"] if s.always else [])])
@@ -920,5 +928,11 @@ class ProgramCompiler(LibraryStatements):
                          f"{', ' if options else ''}{options})")
 
 
-def compile_program(program: ast.Program) -> CompiledProgram:
-    return ProgramCompiler(program).compile()
+def compile_program(program: ast.Program, flat: bool = False) -> CompiledProgram:
+    """`flat`: lower every IF/FOR/WHILE/DO/CASE to jumps, for programs whose
+    loops nest deeper than Python allows its own blocks (20, try included)."""
+    compiler = ProgramCompiler(program, flat)
+    try:
+        return compiler.compile()
+    except RecursionError:  # an expression nested deeper than this compiler recurses
+        raise compiler.error(compiler.current, msg.SYNTAX_ERROR, "expression too complicated") from None

@@ -124,12 +124,11 @@ class VPlusSystem:
                                    msg.SYNTAX_ERROR, file=program.file, line=program.line, column=1,
                                    text=self.source_line(program.file, program.line))
             try:
-                compiled = compile_program(program)
+                compiled, code = _python_code(program)
             except ProgramError as err:
                 err.located(file=program.file, program=program.name)
                 raise err.located(text=self.source_line(program.file, err.line or 0)) from None
             namespace = dict(_NAMESPACE)
-            code = compile(compiled.source, f"<vplus:{program.name}>", "exec")
             exec(code, namespace)
             compiled.function = namespace["program"]
             self.programs[program.name] = compiled
@@ -362,6 +361,35 @@ class Task(TaskControl):
         self.robot.set_speed(values._real(value), always="ALWAYS" in modifiers,
                              monitor="MONITOR" in modifiers,
                              units="MMPS" if "MMPS" in modifiers else "IPS" if "IPS" in modifiers else None)
+
+
+def _python_code(program) -> tuple[CompiledProgram, object]:
+    """The program compiled to Python source and to Python code.  Loops nested
+    deeper than Python's 20 blocks are compiled again to the flat jump-table
+    form, which has no nested blocks."""
+    compiled = compile_program(program)
+    try:
+        return compiled, _python_compile(compiled)
+    except SyntaxError as err:
+        if "too many statically nested blocks" not in str(err):
+            raise
+    compiled = compile_program(program, flat=True)
+    return compiled, _python_compile(compiled)
+
+
+def _python_compile(compiled: CompiledProgram):
+    """Python's compile(); an expression nested too deeply for it is the
+    user's *Syntax error* at that step."""
+    try:
+        return compile(compiled.source, f"<vplus:{compiled.name}>", "exec")
+    except (SyntaxError, RecursionError) as err:
+        if isinstance(err, SyntaxError) and "nested parentheses" not in str(err):
+            raise
+        statement = compiled.line_map.get(getattr(err, "lineno", None) or 0)
+        where = {} if statement is None else {"line": statement.line, "column": statement.column,
+                                              "step": statement.step}
+        raise ProgramError(f"{msg.message(msg.SYNTAX_ERROR)} expression too complicated", msg.SYNTAX_ERROR,
+                           **where) from None
 
 
 class _RobotOfAnotherTask:

@@ -66,7 +66,7 @@ def arity(fn: Callable) -> tuple[int, float]:
     for p in list(inspect.signature(fn).parameters.values())[1:]:
         if p.kind is p.VAR_POSITIONAL:
             most = math.inf
-        elif p.kind is not p.KEYWORD_ONLY and p.name != "always":  # DURATION t ALWAYS: not an argument
+        elif p.kind is not p.KEYWORD_ONLY:  # keyword-only: ALWAYS (DURATION t ALWAYS), not an argument
             most += 1
             fewest += p.default is p.empty
     return fewest, most

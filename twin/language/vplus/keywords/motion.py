@@ -140,7 +140,7 @@ def _accel_value(rt, select=1):
 
 
 @instruction("DURATION")
-def _duration(rt, seconds, always=False):
+def _duration(rt, seconds, *, always=False):
     """DURATION t [ALWAYS]: the next motion, or every motion, takes at least t seconds."""
     rt.robot.set_duration(float(seconds), always)
 
