@@ -161,16 +161,16 @@ def test_procedural_circular_arc_moves_angle_step_every_0_5_s():
     """L6507-6530: the tool follows a computed arc, x = radius*COS(angle)+x.center,
     y = radius*SIN(angle)+y.center, MOVE TRANS(x, y, z, 0, 180, 0), one segment per
     angle.step, each lasting DURATION 0.5 s: "the program moves the robot tool angle.step
-    degrees around the arc every 0.5 second".  `DURATION 0.5 ALWAYS` needs a grammar rule the
-    parser does not have yet: DURATION 0.5 is given before each MOVE instead; z = 250
+    degrees around the arc every 0.5 second" (DURATION 0.5 ALWAYS, as printed); z = 250
     instead of 0 (the Cobra's reach); `last` is LAST, a function name and so a reserved
     word (digest §15): the variable is `last.angle`."""
     program = _program(
         "radius = 60", "x.center = 350", "y.center = 0", "start = 0", "last.angle = 90", "angle.step = 15",
         "MOVE TRANS(radius*COS(start)+x.center, radius*SIN(start)+y.center, 250, 0, 180, 0)", "BREAK",
+        "DURATION 0.5 ALWAYS",
         "FOR angle = start TO last.angle STEP angle.step",
         "x = radius*COS(angle)+x.center", "y = radius*SIN(angle)+y.center",
-        "DURATION 0.5", "MOVE TRANS(x, y, 250, 0, 180, 0)",
+        "MOVE TRANS(x, y, 250, 0, 180, 0)",
         "END", "BREAK")
     sim, _, outcome, rows = run_on_cell(program, max_time=12.0)
     assert outcome.errors == []
@@ -211,14 +211,12 @@ def test_relative_transformations_example():
     the Cobra's reach: MOVE loc_a:TRANS(-50, 20, 30) goes to (350, -30, 250); loc_b =
     -50, 20, 30, 0, 0, 0; loc_c = loc_a:loc_b; MOVE loc_c:loc_b, MOVE loc_a:loc_b:loc_d
     with loc_d = TRANS(0,50) ("x = -50, y = 70, z = 30 relative to loc_a") and
-    MOVE loc_c:INVERSE(loc_b) back to loc_a.  `HERE loc_a:loc_b` (an instruction that
-    assigns) is written `SET loc_b = INVERSE(loc_a):HERE`, what it computes (digest §7.3):
-    the compiler has no HERE instruction yet."""
+    MOVE loc_c:INVERSE(loc_b) back to loc_a.  HERE loc_a:loc_b as printed."""
     program = _program(
         "SET loc_a = TRANS(300,-50,280,0,180,0)",
         "MOVE loc_a", "BREAK", "SET h1 = HERE",
         "MOVE loc_a:TRANS(-50, 20, 30)", "BREAK", "SET h2 = HERE",
-        "SET loc_b = INVERSE(loc_a):HERE",
+        "HERE loc_a:loc_b",
         "SET loc_c = loc_a:loc_b",
         "MOVE loc_c:loc_b", "BREAK", "SET h3 = HERE",
         "SET loc_d = TRANS(0,50)",
@@ -264,11 +262,11 @@ def test_locations_taught_relative_to_an_assembly_frame_follow_the_frame():
     """L6236-6278: locations recorded relative to assm.frame (HERE assm.frame:loc.1) are
     visited at the same place on the assembly wherever the frame is taught next ("the frame
     must be taught each time the assembly moves - the locations on the assembly must be
-    taught only once").  HERE assm.frame:loc.n is written SET loc.n = INVERSE(assm.frame):HERE
-    (no HERE instruction yet); the moves are as printed, the second APPRO to loc.1 included."""
+    taught only once").  HERE assm.frame:loc.n and the moves as printed, the second APPRO to
+    loc.1 included."""
     teach = ["SET assm.frame = FRAME(o1, x1, y1, o1)",
-             "MOVE p1", "BREAK", "SET loc.1 = INVERSE(assm.frame):HERE",
-             "MOVE p2", "BREAK", "SET loc.2 = INVERSE(assm.frame):HERE"]
+             "MOVE p1", "BREAK", "HERE assm.frame:loc.1",
+             "MOVE p2", "BREAK", "HERE assm.frame:loc.2"]
     visit = ["SET assm.frame = FRAME(o2, x2, y2, o2)",
              "APPRO assm.frame:loc.1, 25", "MOVE assm.frame:loc.1", "BREAK", "SET h1 = HERE", "DEPART 25",
              "APPRO assm.frame:loc.1, 25", "MOVE assm.frame:loc.2", "BREAK", "SET h2 = HERE", "DEPART 25", "BREAK"]

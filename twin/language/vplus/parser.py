@@ -146,6 +146,18 @@ class _ToAst(Transformer_NonRecursive):  # long expressions make deep trees
     def set_statement(self, meta, children):
         return ast.SetLocation(children[0], children[1], **_pos(meta))
 
+    def here_statement(self, meta, children):
+        """HERE frame:loc is SET loc = INVERSE(frame):HERE ([000] "HERE" in the summary of
+        location instructions); HERE #p reads the joints (#PHERE)."""
+        *frames, target = children
+        value = ast.Call("#PHERE" if target.name.startswith("#") else "HERE", [])
+        if frames:
+            frame = frames[0]
+            for f in frames[1:]:
+                frame = ast.Compound(frame, f)
+            value = ast.Compound(ast.Call("INVERSE", [frame]), value)
+        return ast.SetLocation(target, value, **_pos(meta))
+
     def declaration(self, meta, children):
         scope = str(children[0]).upper()
         double = False
