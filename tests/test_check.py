@@ -74,7 +74,7 @@ def test_regions_derived_and_unplaced_not_counted():
 def test_error_fields_default_to_null():
     r = make_report(errors=[{"message": "boom"}])
     assert r.errors == [{"message": "boom", "code": None, "file": None, "line": None,
-                         "column": None, "step": None, "program": None,
+                         "column": None, "text": None, "step": None, "program": None,
                          "time": None}]
 
 

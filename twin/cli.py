@@ -31,14 +31,7 @@ def _run(args: argparse.Namespace) -> int:
         print(str(err), file=sys.stderr)
         return 2 if err.code is None else 1
     for error in result.report.errors:
-        where = f"{error['file']}:{error['line']}: " if error.get("file") else ""
-        if error.get("file") and error.get("column") and not error.get("step"):  # GPL: no steps, a column
-            where = f"{error['file']}:{error['line']}:{error['column']}: "
-        step = f" at {error['program']} step {error['step']}" if error.get("step") else ""
-        if not error.get("step") and error.get("program"):
-            step = f" in {error['program']}"
-        code = f" ({error['code']})" if error.get("code") is not None and not error.get("step") else ""
-        print(f"{where}{error['message']}{code}{step}", file=sys.stderr)
+        print(ProgramError.from_dict(error), file=sys.stderr)
     report = result.report
     rate = report.sim_time_s / report.wall_time_s if report.wall_time_s > 0 else float("inf")
     regions = ", ".join(f"{name} {count}" for name, count in report.regions.items() if count)

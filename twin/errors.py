@@ -53,10 +53,16 @@ class ProgramError(Exception):
             where += ": "
         code = f" ({self.code})" if self.code is not None else ""
         step = ""
-        if self.program is not None and self.step is not None:
-            step = f" at {self.program} step {self.step}"
+        if self.program is not None:
+            step = f" at {self.program} step {self.step}" if self.step is not None else f" in {self.program}"
         text = f"\n    {self.text.strip()}" if self.text else ""
         return f"{where}{self.message}{code}{step}{text}"
+
+    @classmethod
+    def from_dict(cls, fields: dict) -> "ProgramError":
+        """The error back from its report entry (as_dict), to print it the same way."""
+        return cls(fields["message"], fields.get("code"),
+                   **{k: fields.get(k) for k in ("file", "line", "column", "text", "step", "program")})
 
     def as_dict(self, time: float | None = None) -> dict:
         return {
@@ -65,6 +71,7 @@ class ProgramError(Exception):
             "file": self.file,
             "line": self.line,
             "column": self.column,
+            "text": self.text,
             "step": self.step,
             "program": self.program,
             "time": time,

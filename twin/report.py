@@ -68,7 +68,7 @@ def count_regions(parts: list[dict]) -> dict[str, int]:
 
 _ERROR_KEYS = {"code": (int, type(None)), "message": (str,), "file": (str, type(None)),
                "line": (int, type(None)), "column": (int, type(None)),
-               "step": (int, type(None)), "program": (str, type(None)),
+               "text": (str, type(None)), "step": (int, type(None)), "program": (str, type(None)),
                "time": (int, float, type(None))}
 
 
