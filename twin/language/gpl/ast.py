@@ -70,6 +70,14 @@ class New(Expr):
 
 
 @dataclass
+class Omitted(Expr):
+    """An argument left out, `New Thread("Worker", , "w1")`: a built-in member's optional one."""
+
+    line: int = 0
+    column: int = 0
+
+
+@dataclass
 class AddressOf(Expr):
     target: Expr
     line: int = 0

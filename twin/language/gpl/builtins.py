@@ -8,6 +8,7 @@ Math's trigonometric functions work in degrees, like every other angle in GPL
 
 from __future__ import annotations
 
+import decimal
 import math
 import struct
 
@@ -54,13 +55,22 @@ def _mid(s, first, length=None) -> str:
     return s[start:] if length is None else s[start:start + max(_ix(length), 0)]
 
 
+def _rounded(number: float, decimals: int) -> str:
+    """`number` with `decimals` places, a half rounded away from zero as VB's Format does
+    (Format(3.125, "0.00") is "3.13"), from the shortest text that reads back as the number."""
+    exact = decimal.Decimal(repr(float(number)))
+    with decimal.localcontext() as ctx:
+        ctx.prec = 400
+        return f"{exact.quantize(decimal.Decimal(1).scaleb(-decimals), rounding=decimal.ROUND_HALF_UP):f}"
+
+
 def _format(value, spec) -> str:
     """Format(expr, "0.00"): VB-style digit placeholders: 0 (always) and # (if any)."""
     spec = _cstr(spec)
     number = _num(value)
     whole, _, frac = spec.partition(".")
     decimals = len(frac.replace(",", ""))
-    text = f"{abs(number):.{decimals}f}"
+    text = _rounded(abs(number), decimals)
     int_part, _, frac_part = text.partition(".")
     min_digits = whole.count("0")
     int_part = int_part.lstrip("0").rjust(min_digits, "0") if min_digits or int_part != "0" else ""

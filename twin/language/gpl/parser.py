@@ -113,7 +113,9 @@ class _ToAst(Transformer):
         return ast.Member(c[0], str(c[1]), **_pos(meta))
 
     def call_args(self, meta, c):
-        return [] if c == [None] else list(c)
+        if c == [None]:
+            return []
+        return [ast.Omitted(line=meta.line, column=meta.column) if a is None else a for a in c]
 
     def call(self, meta, c):
         return ast.Call(c[0], c[1], **_pos(meta))
