@@ -237,3 +237,196 @@ def test_new_of_a_class_without_objects_is_a_clear_error():
     err = info.value
     assert (err.code, err.line, err.column) == (-2006, 2, 9)
     assert "Controller has no objects" in err.message
+
+
+# ------------------------------------------------------------------ malformed projects
+GPR = 'ProjectBegin\nProjectName="bad"\nProjectStart="Main"\nProjectEnd\n'
+
+
+def _main(body: str, extra: str = "") -> dict[str, str]:
+    """A one-module project whose Main holds `body` (Main.gpl line 3 is body's first line)."""
+    return {"Main.gpl": "Module Cell\n    Public Sub Main()\n" + body + "    End Sub\n" + extra + "End Module\n"}
+
+
+# (case id, files, code, file, line, column): the first error of the project.
+MALFORMED = [
+    ("array initialiser", _main("        Dim a() As Double = {1, 2}\n"), -2001, "Main.gpl", 3, 29),
+    ("Dim inside a block", _main("        If True Then\n            Dim k As Integer\n        End If\n"),
+     -2006, "Main.gpl", 4, 13),
+    ("missing End If", _main("        If 1 > 0 Then\n            Console.WriteLine(1)\n"), -2001, "Main.gpl", 5, 9),
+    ("Next without For", _main("        Next\n"), -2001, "Main.gpl", 3, 9),
+    ("unterminated string", _main('        Console.WriteLine("abc)\n'), -2001, "Main.gpl", 3, 27),
+    ("stray character", _main("        Dim x As Integer\n        x = 5 $ 3\n"), -2001, "Main.gpl", 4, 15),
+    ("class without End Class", {"Main.gpl": "Module Cell\n    Class Part\n        Public w As Integer\n"
+                                              "    Public Sub Main()\n    End Sub\nEnd Module\n"},
+     -2001, "Main.gpl", 6, 5),
+    ("Function at end of file", {"Main.gpl": "Module Cell\n    Public Sub Main()\n    End Sub\n"
+                                              "    Function F() As Integer\n        Return 1\n"},
+     -2001, "Main.gpl", 5, 17),
+    ("undefined variable", _main("        total = 3\n"), -2002, "Main.gpl", 3, 9),
+    ("undefined member of a built-in", _main("        Dim loc As New Location\n        loc.Foo = 1\n"),
+     -2002, "Main.gpl", 4, 9),
+    ("Private variable of another module",
+     {**_main("        Console.WriteLine(Data.secret)\n"),
+      "Data.gpl": "Module Data\n    Private secret As Integer\nEnd Module\n"}, -2008, "Main.gpl", 3, 27),
+    ("assignment to a Const", _main("        LIMIT = 4\n", "    Const LIMIT As Integer = 3\n"),
+     -2007, "Main.gpl", 3, 9),
+    ("wrong argument count", _main("        Go(1, 2)\n", "    Sub Go(ByVal a As Integer)\n    End Sub\n"),
+     -2005, "Main.gpl", 3, 9),
+    ("Sub used as a value", _main("        Dim x As Integer = Go()\n", "    Sub Go()\n    End Sub\n"),
+     -2004, "Main.gpl", 3, 28),
+    ("Dim without a type", _main("        Dim x\n"), -2004, "Main.gpl", 3, 13),
+    ("unsupported type Long", _main("        Dim x As Long\n"), -2010, "Main.gpl", 3, 13),
+    ("duplicate local", _main("        Dim x As Integer\n        Dim x As Double\n"), -2003, "Main.gpl", 4, 13),
+    ("ambiguous Public name",
+     {**_main("        count = 1\n"), "A.gpl": "Module A\n    Public count As Integer\nEnd Module\n",
+      "B.gpl": "Module B\n    Public count As Integer\nEnd Module\n"}, -2009, "Main.gpl", 3, 9),
+    ("object assigned to a number", _main("        Dim n As Integer\n        n = New Location\n"),
+     -2004, "Main.gpl", 4, 9),
+    ("Shared use of an instance member", _main("        Console.WriteLine(Location.X)\n"),
+     -2006, "Main.gpl", 3, 27),
+    ("built-in constructor arguments", _main("        Dim p As New Profile(1, 2)\n"), -706, "Main.gpl", 3, 9),
+    ("argument left out of a user Sub",
+     _main("        Go(1, , 3)\n", "    Sub Go(ByVal a As Integer, ByVal b As Integer, ByVal c As Integer)\n"
+           "    End Sub\n"), -2006, "Main.gpl", 3, 11),
+    ("Return with a value in a Sub", _main("        Return 5\n"), -2006, "Main.gpl", 3, 9),
+    ("GoTo into a Try", _main("        GoTo inside\n        Try\ninside:\n            Console.WriteLine(1)\n"
+                              "        Catch\n        End Try\n"), -2011, "Main.gpl", 3, 9),
+    ("New of a Shared-only class", _main("        Dim m As New Move\n"), -2006, "Main.gpl", 3, 13),
+    # run time
+    ("divide by zero", _main("        Dim a As Integer = 0\n        Console.WriteLine(10 / a)\n"),
+     -702, "Main.gpl", 4, 9),
+    ("index out of range", _main("        Dim a(2) As Integer\n        a(3) = 1\n"), -704, "Main.gpl", 4, 9),
+    ("member of Nothing", _main("        Dim loc As Location\n        loc.X = 1\n"), -705, "Main.gpl", 4, 9),
+    ("String that is not a number", _main('        Dim n As Integer = CInt("12a")\n'), -708, "Main.gpl", 3, 9),
+    ("Byte overflow", _main("        Dim b As Byte\n        b = 300\n"), -703, "Main.gpl", 4, 9),
+    ("endless recursion", _main("        Down(1)\n", "    Sub Down(ByVal n As Integer)\n        Down(n + 1)\n"
+                                "    End Sub\n"), -712, "Main.gpl", 5, 5),
+    ("Throw of an empty Exception", _main("        Dim e As New Exception\n        Throw e\n"),
+     -807, "Main.gpl", 4, 9),
+    ("Thread of an unknown procedure", _main('        Dim t As New Thread("Nowhere")\n        t.Start()\n'),
+     -710, "Main.gpl", 4, 9),
+    ("Me in a module procedure", _main("        Console.WriteLine(Me Is Nothing)\n"), -709, "Main.gpl", 3, 9),
+    # project files
+    ("missing source file", {"Project.gpr": GPR.replace("ProjectEnd", 'ProjectSource="Gone.gpl"\nProjectEnd'),
+                             **_main("")}, -2013, "Project.gpr", 4, 1),
+    ("malformed project line", {"Project.gpr": GPR.replace("ProjectEnd", "Source Main.gpl\nProjectEnd"),
+                                **_main("")}, -2013, "Project.gpr", 4, 1),
+]
+
+
+def _first_error(folder: Path) -> ProgramError:
+    try:
+        system, thread = run_project(folder, max_cycles=2000)
+    except ProgramError as err:
+        return err
+    errors = [t.error for t in system.threads if t.error is not None]
+    assert errors, "expected the project to stop on an error"
+    return errors[0]
+
+
+def _write(folder: Path, files: dict[str, str]) -> Path:
+    folder.mkdir()
+    (folder / "Project.gpr").write_text(GPR)
+    for name, text in files.items():
+        (folder / name).write_text(text)
+    return folder
+
+
+@pytest.mark.parametrize("files, code, file, line, column",
+                         [pytest.param(*case[1:], id=case[0]) for case in MALFORMED])
+def test_malformed_project_gives_file_line_column_text_and_code(tmp_path, files, code, file, line, column):
+    """Every mistake is a ProgramError that names the file, line, column, the source line
+    and GPL's code and message (docs/gpl.md lists the codes), never a Python traceback."""
+    folder = _write(tmp_path / "bad", files)
+    err = _first_error(folder)
+    assert (err.code, Path(err.file).name, err.line, err.column) == (code, file, line, column), str(err)
+    source = (folder / file).read_text().splitlines()
+    assert err.text is not None and err.text.strip() == source[line - 1].strip()
+    assert str(code) in str(err)
+
+
+def test_project_folder_without_project_gpr(tmp_path):
+    """Ch. 17: a project is a folder with Project.gpr; without it, -2013 names the folder."""
+    (tmp_path / "Main.gpl").write_text("Sub Main()\nEnd Sub\n")
+    with pytest.raises(ProgramError) as info:
+        run_project(tmp_path)
+    assert info.value.code == -2013 and info.value.file == str(tmp_path)
+
+
+def test_start_procedure_must_be_public_and_without_parameters(tmp_path):
+    """Ch. 17 L3238-3244: the start procedure is Public and takes no arguments (-2012)."""
+    folder = _write(tmp_path / "p", {"Main.gpl": "Module M\n    Public Sub Main(ByVal n As Integer)\n"
+                                                  "    End Sub\nEnd Module\n"})
+    with pytest.raises(ProgramError) as info:
+        run_project(folder)
+    assert info.value.code == -2012 and "Main" in info.value.message
+
+
+def _mutants(text: str):
+    """The text with one line dropped, or cut in half, or a token doubled: the slips of a
+    programmer's editor."""
+    lines = text.splitlines()
+    for i, line in enumerate(lines):
+        if not line.strip():
+            continue
+        yield "\n".join(lines[:i] + lines[i + 1:])
+        yield "\n".join(lines[:i] + [line[: len(line) // 2]] + lines[i + 1:])
+        words = line.split(" ")
+        yield "\n".join(lines[:i] + [" ".join(words + words[-1:])] + lines[i + 1:])
+
+
+@pytest.mark.parametrize("project", ["parts_class", "case_sort", "loops", "strings", "exits_byref", "globals",
+                                     "console_format", "workers", "file_log"])
+def test_no_python_exception_escapes_from_damaged_projects(tmp_path, project):
+    """Each of the valid projects, damaged one line at a time, either still runs or stops
+    with a ProgramError carrying a GPL code and a location; nothing else escapes."""
+    source = DATA / project
+    for path in sorted(source.iterdir()):
+        if path.suffix.lower() not in (".gpl", ".gpo"):
+            continue
+        for n, text in enumerate(_mutants(path.read_text())):
+            folder = tmp_path / f"{path.stem}_{n}"
+            folder.mkdir()
+            for other in source.iterdir():
+                (folder / other.name).write_text(other.read_text())
+            (folder / path.name).write_text(text)
+            try:
+                system, _ = run_project(folder, max_cycles=200, sandbox=tmp_path / "files")
+            except ProgramError as err:
+                assert err.code is not None and err.file and err.line, f"{path.name} mutant {n}: {err}"
+                continue
+            for thread in system.threads:
+                if thread.error is not None:
+                    assert thread.error.code is not None and thread.error.line, f"{path.name} mutant {n}"
+
+
+def test_continue_do_goes_to_the_loop_test():
+    """Ch. 9 Do...Loop Until: Continue Do goes on at the Loop's test (VB.NET), so the loop
+    ends at n = 3 though every pass before 5 continues; a spinning Continue still gives
+    the CPU back (the other thread runs)."""
+    out = output_of("""
+Module M
+    Public ticks As Integer
+    Public Sub Main()
+        Dim n As Integer
+        Dim hits As Integer
+        Dim t As New Thread("Ticker")
+        Do
+            n += 1
+            If n < 5 Then Continue Do
+            hits += 1
+        Loop Until n >= 3
+        Console.WriteLine(n & " " & hits)
+        t.Start()
+        Do While ticks = 0
+            If ticks = 0 Then Continue Do
+        Loop
+        Console.WriteLine("ticker ran")
+    End Sub
+    Public Sub Ticker()
+        ticks = 1
+    End Sub
+End Module
+""")
+    assert out == "3 0\nticker ran\n"

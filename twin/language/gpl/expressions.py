@@ -18,10 +18,11 @@ from ...errors import ProgramError
 from . import ast
 from .builtins import FUNCTION_TYPES, FUNCTIONS, STRING_MEMBERS, STRING_SHARED
 from .errors import (
-    CONSTANT_ASSIGNMENT, INVALID_STATEMENT, PRIVATE_SYMBOL, TYPE_MISMATCH, UNDEFINED_SYMBOL, UNSUPPORTED,
+    SYNTAX_ERROR, CONSTANT_ASSIGNMENT, INVALID_STATEMENT, PRIVATE_SYMBOL, TYPE_MISMATCH, UNDEFINED_SYMBOL, UNSUPPORTED,
     WRONG_ARGUMENT_COUNT,
 )
 from .library import CLASSES, member as library_member
+from .parser import keywords
 from .scope import Scope, _error
 from .symbols import BASIC, ClassSym, DelegateSym, ModuleSym, ProcSym, PropSym, SType, VarSym, is_public, ns
 from .values import CONVERT
@@ -124,6 +125,9 @@ class ExpressionCompiler(Scope):
         return f"_{stem}{self.temp}"
 
     def fail(self, code: int, detail: str, node=None) -> ProgramError:
+        if code == UNDEFINED_SYMBOL and isinstance(node, ast.Name) and node.key in keywords():
+            # a keyword where no statement takes it (`Next` without `For`) reads as a name
+            code, detail = SYNTAX_ERROR, f"unexpected {node.name!r}"
         return _error(code, detail, self.module.file, node or self.node, self.gpl_name)
 
     def condition(self, e: ast.Expr) -> str:

@@ -395,6 +395,13 @@ def _share_types(items: list[ast.Declarator]) -> list[ast.Declarator]:
     return items
 
 
+@lru_cache(maxsize=1)
+def keywords() -> frozenset[str]:
+    """GPL's reserved words (ch. 4 "Variable Declarations"), as the grammar spells them."""
+    return frozenset(t.pattern.value for t in _parser().terminals
+                     if t.pattern.type == "str" and "i" in t.pattern.flags and t.pattern.value.isalpha())
+
+
 def _to_int32(value: int) -> int:
     """&H/&O constants are 32-bit patterns: &HFFFFFFFF is -1."""
     value &= 0xFFFFFFFF
@@ -416,7 +423,9 @@ def _syntax_error(err: UnexpectedInput, lines: list[str], file: str) -> ProgramE
     if isinstance(err, UnexpectedEOF) or line is None or line < 1:
         line, column = len(lines), 1
     source = lines[line - 1] if 0 < line <= len(lines) else ""
-    if isinstance(err, UnexpectedToken):
+    if isinstance(err, UnexpectedToken) and err.token.type == "$END":
+        detail = "unexpected end of file (a block without its End?)"
+    elif isinstance(err, UnexpectedToken):
         got = str(err.token).strip()
         detail = f"unexpected {got!r}" if got else "unexpected end of line"
     elif isinstance(err, UnexpectedCharacters):
