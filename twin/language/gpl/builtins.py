@@ -14,6 +14,7 @@ import struct
 
 from .errors import INVALID_ARGUMENT, INVALID_EXCEPTION, GplError, fail, message
 from .library import gpl_class, shared
+from .library.members import stored
 from .values import (
     GplArray, _cbool, _cbyte, _cdbl, _cint, _csng, _cshort, _cstr, _ix, _num, format_value,
 )
@@ -281,37 +282,10 @@ class GplException:
         self._code = _cint(value)
         self._text = None
 
-    @property
-    def Qualifier(self) -> int:
-        return self._qualifier
-
-    @Qualifier.setter
-    def Qualifier(self, value) -> None:
-        self._qualifier = _cint(value)
-
-    @property
-    def RobotError(self) -> bool:
-        return self._robot_error
-
-    @RobotError.setter
-    def RobotError(self, value) -> None:
-        self._robot_error = _cbool(value)
-
-    @property
-    def RobotNum(self) -> int:
-        return self._robot_num
-
-    @RobotNum.setter
-    def RobotNum(self, value) -> None:
-        self._robot_num = _cint(value)
-
-    @property
-    def Axis(self) -> int:
-        return self._axis
-
-    @Axis.setter
-    def Axis(self, value) -> None:
-        self._axis = _cint(value)
+    Qualifier = stored("_qualifier", _cint)
+    RobotError = stored("_robot_error", _cbool)
+    RobotNum = stored("_robot_num", _cint)
+    Axis = stored("_axis", _cint)
 
     def Message(self) -> str:
         """The full text: `*message*` with the robot or qualifier details (twin format)."""
