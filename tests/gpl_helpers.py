@@ -10,6 +10,19 @@ from twin.language.gpl.runtime import GplSystem
 from twin.language.vplus.runtime import MAJOR_CYCLE, Console
 
 
+# The lock routines of ch. 18 "Creating Thread-Safe Interlocks" (L3351-3367), whose
+# bodies the manual lost, written with Thread.TestAndSet; GPL module members.
+SEMAPHORES = """    Public Sub acquire_sem(ByRef lock As Integer)
+        While Thread.TestAndSet(lock, 1) <> 0
+            Thread.Sleep(0)
+        End While
+    End Sub
+    Public Sub release_sem(ByRef lock As Integer)
+        lock = 0
+    End Sub
+"""
+
+
 class NoRobot:
     """A run without a cell has no controller; the library keeps its per-robot
     state (threads' events, power) keyed on this object instead."""

@@ -38,6 +38,12 @@ CONSTANTS = {
     "gpl_single": ("4096", "integer"),
 }
 
+# Operators done by a helper of values.py, and the type of their result (Table 6-1).
+_OPERATOR_HELPERS = {
+    "/": ("_div", "double"), "\\": ("_idiv", "integer"), "^": ("_pow", "double"),
+    "<<": ("_shl", "integer"), ">>": ("_shr", "integer"),
+}
+
 
 def _library_kind(cls: type, attr: str) -> str:
     raw = inspect.getattr_static(cls, attr)
@@ -487,18 +493,11 @@ class ExpressionCompiler(Scope):
             return (f"({a} + {b})", result) if nums else (f"_add({a}, {b})", None)
         if op in ("-", "*"):
             return (f"({a} {op} {b})", result) if nums else (f"(_num({a}) {op} _num({b}))", SType("double"))
-        if op == "/":
-            return f"_div({a}, {b})", SType("double")
-        if op == "\\":
-            return f"_idiv({a}, {b})", SType("integer")
+        if op in _OPERATOR_HELPERS:
+            helper, rtype = _OPERATOR_HELPERS[op]
+            return f"{helper}({a}, {b})", SType(rtype)
         if op == "mod":
             return f"_mod({a}, {b})", result
-        if op == "^":
-            return f"_pow({a}, {b})", SType("double")
-        if op == "<<":
-            return f"_shl({a}, {b})", SType("integer")
-        if op == ">>":
-            return f"_shr({a}, {b})", SType("integer")
         if op == "&":
             if at is not None and bt is not None and at.is_string and bt.is_string:
                 return f"({a} + {b})", SType("string")
