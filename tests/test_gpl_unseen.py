@@ -430,3 +430,17 @@ Module M
 End Module
 """)
     assert out == "3 0\nticker ran\n"
+
+
+@pytest.mark.parametrize("body, detail", [
+    ("    If 1 > 0 Then\n        Console.WriteLine(1)\n", "unexpected 'Sub', expected If"),
+    ("    While True\n", "unexpected 'Sub', expected While"),
+    ("    Do\n        Console.WriteLine(1)\n", "unexpected 'End', expected Loop"),
+    ("    Next\n", "unexpected 'Next'"),
+])
+def test_an_unclosed_block_names_the_end_it_expected(body, detail):
+    """A block without its End (ch. 9) is reported where the parser noticed it, with the
+    keyword it expected."""
+    with pytest.raises(ProgramError) as info:
+        output_of("Sub Main()\n" + body + "End Sub\n")
+    assert info.value.code == -2001 and detail in info.value.message

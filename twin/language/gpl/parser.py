@@ -417,6 +417,16 @@ def _label_pos(token: Token) -> dict:
     return {"line": token.line, "column": token.column + indent}
 
 
+def _spelled(terminals) -> list[str]:
+    """The keywords among a few expected terminals, as a programmer writes them."""
+    if not terminals or len(terminals) > 3:
+        return []
+    patterns = {t.name: t.pattern for t in _parser().terminals}
+    words = [patterns[name].value for name in terminals
+             if name in patterns and patterns[name].type == "str" and patterns[name].value.isalpha()]
+    return sorted(w.capitalize() for w in words) if len(words) == len(terminals) else []
+
+
 def _syntax_error(err: UnexpectedInput, lines: list[str], file: str) -> ProgramError:
     line = getattr(err, "line", None)
     column = getattr(err, "column", None)
@@ -428,6 +438,9 @@ def _syntax_error(err: UnexpectedInput, lines: list[str], file: str) -> ProgramE
     elif isinstance(err, UnexpectedToken):
         got = str(err.token).strip()
         detail = f"unexpected {got!r}" if got else "unexpected end of line"
+        wanted = _spelled(err.expected)
+        if wanted:
+            detail += f", expected {' or '.join(wanted)}"  # `End Sub` inside an If: expected If
     elif isinstance(err, UnexpectedCharacters):
         detail = f"unexpected character {source[column - 1:column]!r}" if column else "unexpected character"
     else:
