@@ -10,6 +10,19 @@ from twin.language.gpl.runtime import GplSystem
 from twin.language.vplus.runtime import MAJOR_CYCLE, Console
 
 
+# The lock routines of ch. 18 "Creating Thread-Safe Interlocks" (L3351-3367), whose
+# bodies the manual lost, written with Thread.TestAndSet; GPL module members.
+SEMAPHORES = """    Public Sub acquire_sem(ByRef lock As Integer)
+        While Thread.TestAndSet(lock, 1) <> 0
+            Thread.Sleep(0)
+        End While
+    End Sub
+    Public Sub release_sem(ByRef lock As Integer)
+        lock = 0
+    End Sub
+"""
+
+
 class NoRobot:
     """A run without a cell has no controller; the library keeps its per-robot
     state (threads' events, power) keyed on this object instead."""
@@ -26,11 +39,15 @@ class Clock:
 def run_gpl(text: str, start: str = "Main", max_cycles: int = 100000, robot=None, sandbox=None):
     """Load `text` (one file, any number of modules), run `start` and every thread
     it starts to the end; returns (system, main thread)."""
+    return _run(lambda system: system.load_text(text, "test.gpl"), start, max_cycles, robot or NoRobot(), sandbox)
+
+
+def _run(load, start, max_cycles: int, robot, sandbox):
     clock = Clock()
     scheduler = Scheduler()
     console = Console(stdin=io.StringIO(""), echo=None)
-    system = GplSystem(robot or NoRobot(), DigitalIO(), clock, scheduler, console, sandbox=sandbox)
-    system.load_text(text, "test.gpl")
+    system = GplSystem(robot, DigitalIO(), clock, scheduler, console, sandbox=sandbox)
+    load(system)
     thread = system.start(start)
     for _ in range(max_cycles):
         if not scheduler.alive:
@@ -54,3 +71,9 @@ def error_of(text: str, **kw):
     system, thread = run_gpl(text, **kw)
     assert thread.error is not None, "expected the program to stop on an error"
     return thread.error
+
+
+def run_project(folder, max_cycles: int = 100000, sandbox=None):
+    """Load a project folder (Project.gpr), run its start procedure and threads to
+    the end without a cell; returns (system, main thread)."""
+    return _run(lambda system: system.load_project(folder), None, max_cycles, NoRobot(), sandbox)

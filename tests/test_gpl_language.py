@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from gpl_helpers import error_of, output_of, run_gpl
+from gpl_helpers import SEMAPHORES, error_of, output_of, run_gpl
 from twin.errors import ProgramError
 from twin.language.gpl.runtime import GplSystem
 
@@ -765,15 +765,7 @@ Module Locks
     Public my_lock As Integer
     Public inside As Integer
     Public most As Integer
-    Public Sub acquire_sem(ByRef lock As Integer)
-        While Thread.TestAndSet(lock, 1) <> 0
-            Thread.Sleep(1)
-        End While
-    End Sub
-    Public Sub release_sem(ByRef lock As Integer)
-        lock = 0
-    End Sub
-    Public Sub Work()
+""" + SEMAPHORES + """    Public Sub Work()
         Dim i As Integer
         For i = 1 To 5
             acquire_sem(my_lock)

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import pytest
 
-from gpl_helpers import output_of
+from gpl_helpers import SEMAPHORES, output_of
 from twin.errors import ProgramError
 
 
@@ -471,15 +471,7 @@ def test_append_string_under_a_lock():
 Module Strings
     Public my_lock As Integer
     Public text As String
-    Public Sub acquire_sem(ByRef lock As Integer)
-        While Thread.TestAndSet(lock, 1) <> 0
-            Thread.Sleep(0)
-        End While
-    End Sub
-    Public Sub release_sem(ByRef lock As Integer)
-        lock = 0
-    End Sub
-    Public Sub AppendString(ByRef sg As String, ByVal app As String)
+""" + SEMAPHORES + """    Public Sub AppendString(ByRef sg As String, ByVal app As String)
         acquire_sem(my_lock)   ' Prohibit access by other threads
         sg &= app              ' Modify string while locked
         release_sem(my_lock)   ' Allow access by other threads

@@ -9,6 +9,16 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 
+class Named:
+    """A node with a `name`: `key` is the name as lookups compare it."""
+
+    name: str
+
+    @property
+    def key(self) -> str:
+        return self.name.lower()
+
+
 # ----------------------------------------------------------------- expressions
 class Expr:
     line: int = 0
@@ -31,26 +41,18 @@ class Me(Expr):
 
 
 @dataclass
-class Name(Expr):
+class Name(Expr, Named):
     name: str
     line: int = 0
     column: int = 0
 
-    @property
-    def key(self) -> str:
-        return self.name.lower()
-
 
 @dataclass
-class Member(Expr):
+class Member(Expr, Named):
     obj: Expr
     name: str
     line: int = 0
     column: int = 0
-
-    @property
-    def key(self) -> str:
-        return self.name.lower()
 
 
 @dataclass
@@ -65,6 +67,14 @@ class Call(Expr):
 class New(Expr):
     type: "TypeRef"
     args: list[Expr] | None
+    line: int = 0
+    column: int = 0
+
+
+@dataclass
+class Omitted(Expr):
+    """An argument left out, `New Thread("Worker", , "w1")`: a built-in member's optional one."""
+
     line: int = 0
     column: int = 0
 
@@ -111,7 +121,7 @@ class Statement:
 
 
 @dataclass
-class Declarator:
+class Declarator(Named):
     name: str
     bounds: list[Expr | None] | None  # None: not an array; [None, None]: Dim a(,)
     type: TypeRef | None
@@ -120,10 +130,6 @@ class Declarator:
     init: Expr | None
     line: int = 0
     column: int = 0
-
-    @property
-    def key(self) -> str:
-        return self.name.lower()
 
 
 @dataclass
@@ -234,18 +240,14 @@ class Try(Statement):
 
 # ----------------------------------------------------------------- members
 @dataclass
-class Param:
+class Param(Named):
     name: str
     byref: bool
     type: TypeRef | None
 
-    @property
-    def key(self) -> str:
-        return self.name.lower()
-
 
 @dataclass
-class Procedure:
+class Procedure(Named):
     kind: str  # "sub" or "function"
     name: str
     params: list[Param]
@@ -255,13 +257,9 @@ class Procedure:
     line: int
     column: int = 1
 
-    @property
-    def key(self) -> str:
-        return self.name.lower()
-
 
 @dataclass
-class Property:
+class Property(Named):
     name: str
     params: list[Param]
     type: TypeRef
@@ -272,13 +270,9 @@ class Property:
     line: int
     column: int = 1
 
-    @property
-    def key(self) -> str:
-        return self.name.lower()
-
 
 @dataclass
-class DelegateDecl:
+class DelegateDecl(Named):
     kind: str
     name: str
     params: list[Param]
@@ -287,35 +281,23 @@ class DelegateDecl:
     line: int
     column: int = 1
 
-    @property
-    def key(self) -> str:
-        return self.name.lower()
-
 
 @dataclass
-class ClassDecl:
+class ClassDecl(Named):
     name: str
     modifiers: list[str]
     members: list
     line: int
     column: int = 1
 
-    @property
-    def key(self) -> str:
-        return self.name.lower()
-
 
 @dataclass
-class Module:
+class Module(Named):
     name: str
     members: list
     file: str
     line: int = 1
     implicit: bool = False  # members found at the top of a file, outside any Module
-
-    @property
-    def key(self) -> str:
-        return self.name.lower()
 
 
 @dataclass

@@ -8,11 +8,13 @@ Math's trigonometric functions work in degrees, like every other angle in GPL
 
 from __future__ import annotations
 
+import decimal
 import math
 import struct
 
 from .errors import INVALID_ARGUMENT, INVALID_EXCEPTION, GplError, fail, message
 from .library import gpl_class, shared
+from .library.members import stored
 from .values import (
     GplArray, _cbool, _cbyte, _cdbl, _cint, _csng, _cshort, _cstr, _ix, _num, format_value,
 )
@@ -54,13 +56,22 @@ def _mid(s, first, length=None) -> str:
     return s[start:] if length is None else s[start:start + max(_ix(length), 0)]
 
 
+def _rounded(number: float, decimals: int) -> str:
+    """`number` with `decimals` places, a half rounded away from zero as VB's Format does
+    (Format(3.125, "0.00") is "3.13"), from the shortest text that reads back as the number."""
+    exact = decimal.Decimal(repr(float(number)))
+    with decimal.localcontext() as ctx:
+        ctx.prec = 400
+        return f"{exact.quantize(decimal.Decimal(1).scaleb(-decimals), rounding=decimal.ROUND_HALF_UP):f}"
+
+
 def _format(value, spec) -> str:
     """Format(expr, "0.00"): VB-style digit placeholders: 0 (always) and # (if any)."""
     spec = _cstr(spec)
     number = _num(value)
     whole, _, frac = spec.partition(".")
     decimals = len(frac.replace(",", ""))
-    text = f"{abs(number):.{decimals}f}"
+    text = _rounded(abs(number), decimals)
     int_part, _, frac_part = text.partition(".")
     min_digits = whole.count("0")
     int_part = int_part.lstrip("0").rjust(min_digits, "0") if min_digits or int_part != "0" else ""
@@ -271,37 +282,10 @@ class GplException:
         self._code = _cint(value)
         self._text = None
 
-    @property
-    def Qualifier(self) -> int:
-        return self._qualifier
-
-    @Qualifier.setter
-    def Qualifier(self, value) -> None:
-        self._qualifier = _cint(value)
-
-    @property
-    def RobotError(self) -> bool:
-        return self._robot_error
-
-    @RobotError.setter
-    def RobotError(self, value) -> None:
-        self._robot_error = _cbool(value)
-
-    @property
-    def RobotNum(self) -> int:
-        return self._robot_num
-
-    @RobotNum.setter
-    def RobotNum(self, value) -> None:
-        self._robot_num = _cint(value)
-
-    @property
-    def Axis(self) -> int:
-        return self._axis
-
-    @Axis.setter
-    def Axis(self, value) -> None:
-        self._axis = _cint(value)
+    Qualifier = stored("_qualifier", _cint)
+    RobotError = stored("_robot_error", _cbool)
+    RobotNum = stored("_robot_num", _cint)
+    Axis = stored("_axis", _cint)
 
     def Message(self) -> str:
         """The full text: `*message*` with the robot or qualifier details (twin format)."""

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 from . import ast
 from .errors import DUPLICATE_SYMBOL, INVALID_STATEMENT
-from .expressions import waiting_library_names
+from .expressions import library_byref, library_names, library_waits
 from .scope import Scope, _error, mangle
 from .statements import CompiledUnit, ProcCompiler
 from .symbols import ClassSym, DelegateSym, ModuleSym, ProcSym, PropSym, SType, VarSym
@@ -58,7 +58,8 @@ class ProjectCompiler:
         self.units: list[CompiledUnit] = []
         self.statics: dict[str, object] = {}
         self.public_procs: dict[str, ProcSym] = {}
-        self.waiting = waiting_library_names()
+        self.waiting = library_names(library_waits)  # member names whose call may wait: `yield from`
+        self.byref_names = library_names(lambda cls, attr: bool(library_byref(cls, attr)))
 
     # ------------------------------------------------------------ declaration pass
     def compile(self) -> CompiledProject:
@@ -79,6 +80,7 @@ class ProjectCompiler:
         for cls in self.classes:
             self.waiting.update(cls.methods)
             self.waiting.update(cls.properties)
+            self.byref_names.update(key for key, proc in cls.methods.items() if proc.byref_positions)
         init_units, init_subs = [], []
         for sym in self.module_order:
             init_units.append(self.compile_module_init(sym))

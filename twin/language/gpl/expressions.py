@@ -18,10 +18,11 @@ from ...errors import ProgramError
 from . import ast
 from .builtins import FUNCTION_TYPES, FUNCTIONS, STRING_MEMBERS, STRING_SHARED
 from .errors import (
-    CONSTANT_ASSIGNMENT, INVALID_STATEMENT, PRIVATE_SYMBOL, TYPE_MISMATCH, UNDEFINED_SYMBOL, UNSUPPORTED,
+    SYNTAX_ERROR, CONSTANT_ASSIGNMENT, INVALID_STATEMENT, PRIVATE_SYMBOL, TYPE_MISMATCH, UNDEFINED_SYMBOL, UNSUPPORTED,
     WRONG_ARGUMENT_COUNT,
 )
 from .library import CLASSES, member as library_member
+from .parser import keywords
 from .scope import Scope, _error
 from .symbols import BASIC, ClassSym, DelegateSym, ModuleSym, ProcSym, PropSym, SType, VarSym, is_public, ns
 from .values import CONVERT
@@ -35,6 +36,12 @@ CONSTANTS = {
     "gpl_righty": ("1", "integer"), "gpl_lefty": ("2", "integer"), "gpl_above": ("4", "integer"),
     "gpl_below": ("8", "integer"), "gpl_flip": ("16", "integer"), "gpl_noflip": ("32", "integer"),
     "gpl_single": ("4096", "integer"),
+}
+
+# Operators done by a helper of values.py, and the type of their result (Table 6-1).
+_OPERATOR_HELPERS = {
+    "/": ("_div", "double"), "\\": ("_idiv", "integer"), "^": ("_pow", "double"),
+    "<<": ("_shl", "integer"), ">>": ("_shr", "integer"),
 }
 
 
@@ -64,21 +71,27 @@ def library_byref(cls: type, attr: str) -> frozenset:
     return getattr(_library_function(cls, attr), "gpl_byref", frozenset())
 
 
+def library_has_instances(cls: type) -> bool:
+    """A class of only Shared members (Controller, Move, Signal...) defines no constructor."""
+    return cls.__init__ is not object.__init__
+
+
 def library_arity(cls: type, attr: str) -> tuple[int, int]:
     """How many GPL arguments a built-in method takes (not counting self / rt)."""
-    params = list(inspect.signature(_library_function(cls, attr)).parameters.values())[1:]
+    return arity(_library_function(cls, attr), 1)
+
+
+def arity(fn, skip: int) -> tuple[int, int]:
+    """How many arguments a Python function takes after its first `skip` (self, rt)."""
+    params = list(inspect.signature(fn).parameters.values())[skip:]
     if any(p.kind is p.VAR_POSITIONAL for p in params):
         return sum(p.default is p.empty and p.kind is p.POSITIONAL_OR_KEYWORD for p in params), 99
     return sum(p.default is p.empty for p in params), len(params)
 
 
-def waiting_library_names() -> set[str]:
-    names = set()
-    for cls in CLASSES.values():
-        for key, attr in cls.gpl_members.items():
-            if library_waits(cls, attr):
-                names.add(key)
-    return names
+def library_names(test) -> set[str]:
+    """The member names (lower case) of built-in classes for which test(cls, attr) holds."""
+    return {key for cls in CLASSES.values() for key, attr in cls.gpl_members.items() if test(cls, attr)}
 
 
 def _is_variable(e: ast.Expr) -> bool:
@@ -118,6 +131,9 @@ class ExpressionCompiler(Scope):
         return f"_{stem}{self.temp}"
 
     def fail(self, code: int, detail: str, node=None) -> ProgramError:
+        if code == UNDEFINED_SYMBOL and isinstance(node, ast.Name) and node.key in keywords():
+            # a keyword where no statement takes it (`Next` without `For`) reads as a name
+            code, detail = SYNTAX_ERROR, f"unexpected {node.name!r}"
         return _error(code, detail, self.module.file, node or self.node, self.gpl_name)
 
     def condition(self, e: ast.Expr) -> str:
@@ -180,7 +196,7 @@ class ExpressionCompiler(Scope):
         raise self.fail(INVALID_STATEMENT, "cannot assign to this expression", target)
 
     def store_member(self, target: ast.Member, args: list | None, code: str, vt, depth: int) -> None:
-        ocode, ot = self.expr_or_ns(target.obj)
+        ocode, ot = self.expr_or_ns(target.obj, target.key)
         key = target.key
         arg_codes = [self.expr(a)[0] for a in (args or [])]
         if ot is not None and ot.base == "ns":
@@ -270,16 +286,17 @@ class ExpressionCompiler(Scope):
     def me_code(self) -> str:
         return "me" if self.me_available else "rt.no_me()"
 
-    def expr_or_ns(self, e: ast.Expr) -> tuple[str, SType | None]:
-        """Like expr, but a module, class or built-in class name gives a namespace."""
+    def expr_or_ns(self, e: ast.Expr, member: str | None = None) -> tuple[str, SType | None]:
+        """Like expr, but a module, class or built-in class name gives a namespace
+        (`member`: the member that follows, when known)."""
         if isinstance(e, ast.Name):
-            sym = self.lookup_value(e.key, e)
+            sym = self.module_or_variable(self.lookup_value(e.key, e), e.key, member)
             if isinstance(sym, (ModuleSym, ClassSym, DelegateSym)) or isinstance(sym, type):
                 return "", ns(sym)
             if sym is None and e.key == "string":
                 return "", ns("string")
         if isinstance(e, ast.Member):
-            ocode, ot = self.expr_or_ns(e.obj)
+            ocode, ot = self.expr_or_ns(e.obj, e.key)
             if ot is not None and ot.base == "ns" and isinstance(ot.ref, (ModuleSym, ClassSym)):
                 sym = self.member_of_namespace(ot.ref, e.key, e)
                 if isinstance(sym, (ClassSym, DelegateSym)):
@@ -308,8 +325,18 @@ class ExpressionCompiler(Scope):
             return "rt.no_me()", None
         return "me", SType("user", self.cls)
 
+    def module_or_variable(self, sym, key: str, member: str | None):
+        """A name that is a module and also a module's only Public variable of that name
+        (`Public tray As RefFrame` in Module Tray; names are case-insensitive): the
+        module where it has the member that follows, else the variable."""
+        if not isinstance(sym, ModuleSym) or (member is not None and sym.member(member) is not None):
+            return sym
+        found = [m.member(key) for m in self.project.module_order]
+        found = [v for v in found if isinstance(v, VarSym) and is_public(v)]
+        return found[0] if len(found) == 1 else sym
+
     def e_Name(self, e: ast.Name):
-        sym = self.lookup_value(e.key, e)
+        sym = self.module_or_variable(self.lookup_value(e.key, e), e.key, None)
         if isinstance(sym, VarSym):
             return self.var_code(sym), sym.type
         if sym is None:
@@ -358,7 +385,12 @@ class ExpressionCompiler(Scope):
             codes = [self.convert(*self.expr(a), pt) for a, pt in zip(args, ctors[0].param_types)] if ctors else []
             return f"(yield from N_{cls.py}(rt, {', '.join([ctor] + codes)}))", SType("user", cls)
         if t.base == "lib":
-            codes = [self.expr(a)[0] for a in args]
+            if not library_has_instances(t.ref):
+                raise self.fail(INVALID_STATEMENT, f"{t.ref.gpl_name} has no objects: use its Shared members, "
+                                f"{t.ref.gpl_name}.Member", e)
+            low, high = arity(t.ref.__init__, 2)
+            self.check_count(f"New {t.ref.gpl_name}", low, high, len(args), e)
+            codes = self.library_arguments(t.ref.__init__, args, 2, {}, e)
             return f"L_{t.ref.gpl_name.lower()}({', '.join(['rt'] + codes)})", SType("lib", t.ref)
         if t.base == "delegate":
             return self.new_delegate(e, t.ref), SType("delegate", t.ref)
@@ -461,18 +493,11 @@ class ExpressionCompiler(Scope):
             return (f"({a} + {b})", result) if nums else (f"_add({a}, {b})", None)
         if op in ("-", "*"):
             return (f"({a} {op} {b})", result) if nums else (f"(_num({a}) {op} _num({b}))", SType("double"))
-        if op == "/":
-            return f"_div({a}, {b})", SType("double")
-        if op == "\\":
-            return f"_idiv({a}, {b})", SType("integer")
+        if op in _OPERATOR_HELPERS:
+            helper, rtype = _OPERATOR_HELPERS[op]
+            return f"{helper}({a}, {b})", SType(rtype)
         if op == "mod":
             return f"_mod({a}, {b})", result
-        if op == "^":
-            return f"_pow({a}, {b})", SType("double")
-        if op == "<<":
-            return f"_shl({a}, {b})", SType("integer")
-        if op == ">>":
-            return f"_shr({a}, {b})", SType("integer")
         if op == "&":
             if at is not None and bt is not None and at.is_string and bt.is_string:
                 return f"({a} + {b})", SType("string")
@@ -516,7 +541,7 @@ class ExpressionCompiler(Scope):
                     and not args:
                 return "_result", self.proc.return_type
         if isinstance(func, ast.Member):
-            ocode, ot = self.expr_or_ns(func.obj)
+            ocode, ot = self.expr_or_ns(func.obj, func.key)
             return self.call_member(ocode, ot, func, args, e, statement, no_parens)
         code, t = self.expr(func)
         if t is not None and t.is_array:
@@ -619,15 +644,14 @@ class ExpressionCompiler(Scope):
     def call_member(self, ocode: str, ot: SType | None, func: ast.Member, args, e, statement: bool,
                     no_parens: bool) -> tuple[str, SType | None]:
         key = func.key
-        codes = [self.expr(a)[0] for a in args]
         if ot is not None and ot.base == "ns":
             owner = ot.ref
             if owner == "string":
                 if key not in STRING_SHARED:
                     raise self.fail(UNDEFINED_SYMBOL, f"String.{func.name}", func)
-                return f"_STRING_SHARED[{key!r}]({', '.join(codes)})", SType("integer")
+                return f"_STRING_SHARED[{key!r}]({', '.join(self.arg_codes(args))})", SType("integer")
             if isinstance(owner, type):
-                return self.library_call(f"L_{owner.gpl_name.lower()}", owner, key, args, codes, func, shared=True)
+                return self.library_call(f"L_{owner.gpl_name.lower()}", owner, key, args, func, shared=True)
             sym = self.member_of_namespace(owner, key, func)
             if isinstance(sym, ProcSym):
                 if sym.instance:
@@ -642,12 +666,12 @@ class ExpressionCompiler(Scope):
                 return self.get_property(sym, None, args, e)
             raise self.fail(TYPE_MISMATCH, f"{func.name} is not a value", func)
         if ot is not None and ot.is_array:
-            return self.array_member(ocode, ot, key, codes, func)
+            return self.array_member(ocode, ot, key, self.arg_codes(args), func)
         if ot is not None and ot.is_string:
             if key not in STRING_MEMBERS:
                 raise self.fail(UNDEFINED_SYMBOL, f"String member {func.name}", func)
             _, is_property, rtype = STRING_MEMBERS[key]
-            code = f"_STRING[{key!r}]({', '.join([ocode] + codes)})"
+            code = f"_STRING[{key!r}]({', '.join([ocode] + self.arg_codes(args))})"
             return code, SType(rtype) if rtype else (SType("string", None, 1) if key == "split" else None)
         if ot is not None and ot.base == "user":
             sym = self.class_member(ot.ref, key, func)
@@ -664,14 +688,51 @@ class ExpressionCompiler(Scope):
                 return self.get_property(sym, None if sym.shared else ocode, args, e)
             raise self.fail(TYPE_MISMATCH, f"{func.name} is not a value", func)
         if ot is not None and ot.base == "lib" and not ot.rank:
-            return self.library_call(ocode, ot.ref, key, args, codes, func, shared=False)
+            return self.library_call(ocode, ot.ref, key, args, func, shared=False)
         if ot is not None and ot.base in BASIC and not ot.rank:
             raise self.fail(UNDEFINED_SYMBOL, f"{ot} has no member {func.name}", func)
+        if args and key in self.project.byref_names:
+            return self.untyped_call_with_refs(ocode, key, args)
+        codes = self.arg_codes(args)
         call_args = f"({', '.join(codes)}{',' if codes else ''})" if (args or not no_parens) else "None"
         call = f"_callm(rt, {ocode}, {key!r}, {call_args})"
         if key in self.project.waiting:
             return f"(yield from _w({call}))", None
         return call, None
+
+    def untyped_call_with_refs(self, ocode: str, key: str, args) -> tuple[str, None]:
+        """obj.key(args) where only the run time knows obj's class (`tc.Client.Receive(buf, n)`)
+        and some class has a ByRef member of that name: each variable goes in a
+        cell that _callm passes ByRef where the member found takes it so, and
+        that is written back to the variable only then."""
+        codes, cells = [], []
+        for a in args:
+            code = self.expr(a)[0]
+            if self.assignable(a):
+                cell = self.fresh("ref")
+                self.emit(self.depth, f"{cell} = _Cell({code})")
+                cells.append((cell, a))
+                code = cell
+            codes.append(code)
+        temp = self.fresh("v")
+        self.emit(self.depth, f"{temp} = (yield from _w(_callm(rt, {ocode}, {key!r}, ({', '.join(codes)},))))")
+        for cell, a in cells:
+            self.emit(self.depth, f"if {cell}.passed:")
+            self.store(a, f"{cell}.value", None, self.depth + 1)
+        return temp, None
+
+    def assignable(self, e: ast.Expr) -> bool:
+        """A variable, a field of a user object or an array element (not a function's result)."""
+        if isinstance(e, ast.Name):
+            sym = self.lookup_value(e.key, e)
+            return isinstance(sym, VarSym) and not sym.const
+        if isinstance(e, ast.Call):
+            return self.assignable(e.func)
+        if isinstance(e, ast.Member):
+            ot = self.expr_or_ns(e.obj)[1]
+            return ot is not None and ot.base == "user" and not ot.rank and \
+                isinstance(self.class_member(ot.ref, e.key, e), VarSym)
+        return False
 
     def array_member(self, ocode: str, ot: SType, key: str, codes, func) -> tuple[str, SType | None]:
         if key == "length":
@@ -702,7 +763,7 @@ class ExpressionCompiler(Scope):
             raise self.fail(UNDEFINED_SYMBOL, f"{cls.gpl_name}.{getattr(node, 'name', key)}", node)
         return attr
 
-    def library_call(self, owner_code: str, cls: type, key: str, args, codes, func, shared: bool):
+    def library_call(self, owner_code: str, cls: type, key: str, args, func, shared: bool):
         attr = self.library_attr(cls, key, func)
         kind = _library_kind(cls, attr)
         if shared and kind != "shared":
@@ -712,18 +773,13 @@ class ExpressionCompiler(Scope):
                 raise self.fail(TYPE_MISMATCH, f"{cls.gpl_name}.{func.name} takes no arguments", func)
             return f"{owner_code}.{attr}", None
         low, high = library_arity(cls, attr)
-        if not low <= len(args) <= high:
-            expected = str(low) if low == high else f"{low} to {high}" if high < 99 else f"at least {low}"
-            raise self.fail(WRONG_ARGUMENT_COUNT,
-                            f"{cls.gpl_name}.{func.name} takes {expected} argument(s), {len(args)} given", func)
-        byref = library_byref(cls, attr)
-        call_codes = list(codes)
+        self.check_count(f"{cls.gpl_name}.{func.name}", low, high, len(args), func)
         refs = []
-        for i in sorted(byref):
-            if i < len(args):
-                ref = self.fresh("ref")
-                refs.append((ref, args[i]))
-                call_codes[i] = ref
+        for i in sorted(library_byref(cls, attr)):
+            if i < len(args) and not isinstance(args[i], ast.Omitted):
+                refs.append((self.fresh("ref"), args[i]))
+        call_codes = self.library_arguments(_library_function(cls, attr), args, 1,
+                                            {id(arg): ref for ref, arg in refs}, func)
         prefix = ["rt"] if kind == "shared" else []
         call = f"{owner_code}.{attr}({', '.join(prefix + call_codes)})"
         if library_waits(cls, attr):
@@ -731,6 +787,34 @@ class ExpressionCompiler(Scope):
         if refs:
             return self.with_refs(call, refs)
         return call, None
+
+    def check_count(self, what: str, low: int, high: int, given: int, node) -> None:
+        if not low <= given <= high:
+            expected = str(low) if low == high else f"{low} to {high}" if high < 99 else f"at least {low}"
+            raise self.fail(WRONG_ARGUMENT_COUNT, f"{what} takes {expected} argument(s), {given} given", node)
+
+    def library_arguments(self, fn, args, skip: int, refs: dict, node) -> list[str]:
+        """The argument codes for a built-in's Python function `fn` after its first `skip`
+        parameters (self, rt); after an argument left out (`New Thread("w", , "w1")`) the
+        rest go by keyword."""
+        params = [p for p in list(inspect.signature(fn).parameters.values())[skip:]
+                  if p.kind is p.POSITIONAL_OR_KEYWORD]
+        codes, by_keyword = [], False
+        for i, a in enumerate(args):
+            if isinstance(a, ast.Omitted) or (by_keyword and i >= len(params)):
+                if i >= len(params) or params[i].default is params[i].empty:
+                    raise self.fail(WRONG_ARGUMENT_COUNT, f"argument {i + 1} cannot be left out", a)
+                by_keyword = True
+                continue
+            code = refs.get(id(a)) or self.expr(a)[0]
+            codes.append(f"{params[i].name}={code}" if by_keyword else code)
+        return codes
+
+    def arg_codes(self, args) -> list[str]:
+        return [self.expr(a)[0] for a in args]
+
+    def e_Omitted(self, e: ast.Omitted):
+        raise self.fail(INVALID_STATEMENT, "only an optional argument of a built-in member can be left out", e)
 
     def with_refs(self, call: str, refs) -> tuple[str, None]:
         """ByRef arguments of a built-in: a Ref made before the call, its value

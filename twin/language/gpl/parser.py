@@ -113,7 +113,9 @@ class _ToAst(Transformer):
         return ast.Member(c[0], str(c[1]), **_pos(meta))
 
     def call_args(self, meta, c):
-        return [] if c == [None] else list(c)
+        if c == [None]:
+            return []
+        return [ast.Omitted(line=meta.line, column=meta.column) if a is None else a for a in c]
 
     def call(self, meta, c):
         return ast.Call(c[0], c[1], **_pos(meta))
@@ -393,6 +395,13 @@ def _share_types(items: list[ast.Declarator]) -> list[ast.Declarator]:
     return items
 
 
+@lru_cache(maxsize=1)
+def keywords() -> frozenset[str]:
+    """GPL's reserved words (ch. 4 "Variable Declarations"), as the grammar spells them."""
+    return frozenset(t.pattern.value for t in _parser().terminals
+                     if t.pattern.type == "str" and "i" in t.pattern.flags and t.pattern.value.isalpha())
+
+
 def _to_int32(value: int) -> int:
     """&H/&O constants are 32-bit patterns: &HFFFFFFFF is -1."""
     value &= 0xFFFFFFFF
@@ -408,15 +417,30 @@ def _label_pos(token: Token) -> dict:
     return {"line": token.line, "column": token.column + indent}
 
 
+def _spelled(terminals) -> list[str]:
+    """The keywords among a few expected terminals, as a programmer writes them."""
+    if not terminals or len(terminals) > 3:
+        return []
+    patterns = {t.name: t.pattern for t in _parser().terminals}
+    words = [patterns[name].value for name in terminals
+             if name in patterns and patterns[name].type == "str" and patterns[name].value.isalpha()]
+    return sorted(w.capitalize() for w in words) if len(words) == len(terminals) else []
+
+
 def _syntax_error(err: UnexpectedInput, lines: list[str], file: str) -> ProgramError:
     line = getattr(err, "line", None)
     column = getattr(err, "column", None)
     if isinstance(err, UnexpectedEOF) or line is None or line < 1:
         line, column = len(lines), 1
     source = lines[line - 1] if 0 < line <= len(lines) else ""
-    if isinstance(err, UnexpectedToken):
+    if isinstance(err, UnexpectedToken) and err.token.type == "$END":
+        detail = "unexpected end of file (a block without its End?)"
+    elif isinstance(err, UnexpectedToken):
         got = str(err.token).strip()
         detail = f"unexpected {got!r}" if got else "unexpected end of line"
+        wanted = _spelled(err.expected)
+        if wanted:
+            detail += f", expected {' or '.join(wanted)}"  # `End Sub` inside an If: expected If
     elif isinstance(err, UnexpectedCharacters):
         detail = f"unexpected character {source[column - 1:column]!r}" if column else "unexpected character"
     else:

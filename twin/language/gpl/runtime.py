@@ -22,7 +22,7 @@ from ...errors import ProgramError
 from ..vplus.runtime import Console
 from . import builtins, values
 from .compiler import CompiledProject, ProjectCompiler
-from .expressions import library_arity
+from .expressions import library_arity, library_byref
 from .errors import (
     DIVIDE_BY_ZERO, INVALID_ARGUMENT, INVALID_STATEMENT, ME_UNDEFINED, NO_START_PROCEDURE, NULL_OBJECT,
     OVERFLOW, STACK_OVERFLOW, TYPE_MISMATCH, UNDEFINED_PROCEDURE, UNDEFINED_SYMBOL, WRONG_ARGUMENT_COUNT,
@@ -137,6 +137,29 @@ class _ItemRef:
         self.array[self.index] = v
 
 
+class _Cell(Ref):
+    """A variable given to a member that only the run time finds (expressions.py,
+    untyped_call_with_refs): `passed` says whether the member took it ByRef."""
+
+    __slots__ = ("passed",)
+
+    def __init__(self, value):
+        super().__init__(value)
+        self.passed = False
+
+
+def _by_position(args: tuple, byref: frozenset) -> tuple:
+    """The arguments as the member takes them: a Ref at its ByRef positions, values elsewhere."""
+    out = []
+    for i, a in enumerate(args):
+        if a.__class__ is _Cell:
+            a.passed = i in byref
+            out.append(a if a.passed else a.value)
+        else:
+            out.append(Ref(a) if i in byref else a)
+    return tuple(out)
+
+
 def _invoke(rt, delegate, args: tuple):
     if delegate is None:
         raise fail(NULL_OBJECT, "calling a Delegate that is Nothing")
@@ -166,6 +189,11 @@ def _member_of(obj, key: str):
 
 def _callm(rt, obj, key: str, args: tuple | None):
     """obj.key or obj.key(args) when the compiler did not know obj's class."""
+    if obj is None:
+        raise fail(NULL_OBJECT, f"member {key} of Nothing")
+    if args:
+        byref = _byref_positions(obj, key)
+        args = _by_position(args, byref) if byref or any(a.__class__ is _Cell for a in args) else args
     if obj.__class__ is str:
         fn = builtins.STRING_MEMBERS.get(key)
         if fn is None:
@@ -190,7 +218,6 @@ def _callm(rt, obj, key: str, args: tuple | None):
             if len(args or ()) != entry[4]:
                 raise fail(WRONG_ARGUMENT_COUNT, f"{type(obj).gpl_name}.{key} takes {entry[4]} argument(s), "
                            f"{len(args or ())} given")
-            args = tuple(Ref(a) if i in entry[3] else a for i, a in enumerate(args or ()))
             return entry[1](rt, obj, *args) if entry[2] else entry[1](rt, *args)
         if kind == "property":
             return entry[1](rt, obj, *(args or ())) if entry[3] else entry[1](rt, *(args or ()))
@@ -207,6 +234,13 @@ def _callm(rt, obj, key: str, args: tuple | None):
     if getattr(raw, "gpl_shared", False):
         return getattr(obj, attr)(rt, *(args or ()))
     return getattr(obj, attr)(*(args or ()))
+
+
+def _byref_positions(obj, key: str) -> frozenset:
+    entry = getattr(type(obj), "gpl_members", {}).get(key)
+    if isinstance(entry, tuple):  # a user class
+        return entry[3] if entry[0] == "method" else frozenset()
+    return library_byref(type(obj), entry) if entry is not None else frozenset()
 
 
 def _setm(rt, obj, key: str, args: tuple | None, value):
@@ -561,7 +595,7 @@ _NAMESPACE = {
     "_Jump": _Jump, "_Break": _Break, "_ExitTry": _ExitTry,
     "_Delegate": Delegate, "_invoke": _invoke, "_w": _w, "_callm": _callm, "_setm": _setm,
     "_setattr": _setattr, "_call": _call, "_setindex": _setindex, "_redim": _redim,
-    "_case_value": _case_value, "_object": _object, "_catch": _catch, "_throw": _throw, "_rethrow": _rethrow, "_Ref": Ref, "_GlobalRef": _GlobalRef, "_AttrRef": _AttrRef, "_ItemRef": _ItemRef,
+    "_case_value": _case_value, "_object": _object, "_catch": _catch, "_throw": _throw, "_rethrow": _rethrow, "_Ref": Ref, "_Cell": _Cell, "_GlobalRef": _GlobalRef, "_AttrRef": _AttrRef, "_ItemRef": _ItemRef,
     "_STRING": {k: v[0] for k, v in builtins.STRING_MEMBERS.items()},
     "_STRING_SHARED": builtins.STRING_SHARED,
     "_delegate_named": _delegate_named,

@@ -49,6 +49,7 @@ class _Loop:
     kind: str  # "for", "while", "do", "select", "dispatch"
     ident: int
     step: tuple | None = None  # For: (var node, step name) for Continue For
+    post: tuple | None = None  # Do ... Loop While/Until: the test Continue Do goes to
 
 
 def _has_labels(body: list[ast.Statement]) -> bool:
@@ -359,8 +360,8 @@ class ProcCompiler(ExpressionCompiler):
         self.emit(depth + 1, "_slice = 0")
         self.emit(depth + 1, "yield rt.SLICE")
 
-    def loop_body(self, s, kind: str, body: list, depth: int, step=None) -> _Loop:
-        loop = _Loop(kind, id(s), step=step)
+    def loop_body(self, s, kind: str, body: list, depth: int, step=None, post=None) -> _Loop:
+        loop = _Loop(kind, id(s), step=step, post=post)
         self.loops.append(loop)
         self.block(body, depth)
         self.loops.pop()
@@ -424,7 +425,7 @@ class ProcCompiler(ExpressionCompiler):
             self.loop_test(depth + 1, cond, until=kind == "until")
 
         def body(d):
-            self.loop_body(s, "do", s.body, d)
+            self.loop_body(s, "do", s.body, d, post=s.post)
             if s.post is not None:
                 self.node = s
                 kind, cond = s.post
@@ -601,12 +602,18 @@ class ProcCompiler(ExpressionCompiler):
         for i in range(len(self.loops) - 1, -1, -1):
             loop = self.loops[i]
             if loop.kind == s.kind:
-                if any(l.kind in ("dispatch", "select") for l in self.loops[i + 1:]):
-                    raise self.fail(UNSUPPORTED, "Continue from a block with labels or an Exit Select", s)
+                if self.loops[i + 1:]:  # a Python `continue` would go on with the inner loop
+                    raise self.fail(UNSUPPORTED, "Continue from an inner loop, a block with labels or an "
+                                    "Exit Select", s)
+                # what the end of the body does: the next For value, the Loop test, a slice
                 if loop.step is not None:
                     var, step = loop.step
                     code, _ = self.expr(var)
                     self.store(var, f"{code} + {step}", None, depth)
+                if loop.post is not None:
+                    kind, cond = loop.post
+                    self.loop_test(depth, cond, until=kind == "until")
+                self.slice_check(depth)
                 self.emit(depth, "continue")
                 return
         raise self.fail(INVALID_STATEMENT, f"Continue {s.kind.capitalize()} outside a loop", s)

@@ -90,11 +90,21 @@ class GplArray:
 
 
 # ---------------------------------------------------------------- conversions
+class Single(float):
+    """A Single's value: a float rounded to 32 bits, marked so that CStr, & and Console
+    show it as a Single (7 significant digits).  Arithmetic on it gives a plain float
+    (a Double, ch. 6: most arithmetic is done in Double)."""
+
+    __slots__ = ()
+
+
 def _num(v):
     """A value as a number for arithmetic: Booleans are -1/0, Strings are parsed."""
     t = v.__class__
     if t is int or t is float:
         return v
+    if t is Single:
+        return float(v)
     if t is bool:
         return -1 if v else 0
     if t is str:
@@ -150,10 +160,12 @@ def _cdbl(v) -> float:
     return float(_num(v))
 
 
-def _csng(v) -> float:
+def _csng(v) -> Single:
+    if v.__class__ is Single:
+        return v
     v = _cdbl(v)
     try:
-        return struct.unpack("f", struct.pack("f", v))[0]
+        return Single(struct.unpack("f", struct.pack("f", v))[0])
     except OverflowError:
         raise fail(OVERFLOW, f"{v} as Single") from None
 
@@ -175,8 +187,8 @@ def _cstr(v) -> str:
 
 
 def format_value(v) -> str:
-    """How CStr, & and Console show a value: integers plainly, reals with up to 15
-    significant digits (1E+32 style exponents), Booleans as True / False."""
+    """How CStr, & and Console show a value: integers plainly, Doubles with up to 15
+    significant digits, Singles with up to 7 (1E+32 style exponents), Booleans as True / False."""
     t = v.__class__
     if t is str:
         return v
@@ -184,14 +196,11 @@ def format_value(v) -> str:
         return "True" if v else "False"
     if t is int:
         return str(v)
-    if t is float:
-        if v.is_integer() and abs(v) < 1e15:
+    if t is float or t is Single:
+        digits = 7 if t is Single else 15  # a Single shows 0.1, not 0.100000001490116
+        if v.is_integer() and abs(v) < 10 ** digits:
             return str(int(v))
-        text = f"{v:.15G}"
-        if _csng_exact(v):  # a Single's value: 7 digits, as VB shows a Single (0.1, not 0.100000001490116)
-            short = f"{v:.7G}"
-            if struct.unpack("f", struct.pack("f", float(short)))[0] == v:
-                text = short
+        text = f"{v:.{digits}G}"
         if "E" in text:
             mantissa, exponent = text.split("E")
             sign = exponent[0]
@@ -201,13 +210,6 @@ def format_value(v) -> str:
     if v is None:
         return ""
     raise fail(TYPE_MISMATCH, f"{getattr(type(v), 'gpl_name', type(v).__name__)} used as a String")
-
-
-def _csng_exact(v: float) -> bool:
-    try:
-        return struct.unpack("f", struct.pack("f", v))[0] == v
-    except OverflowError:
-        return False
 
 
 CONVERT = {

@@ -27,6 +27,7 @@ import numpy as np
 from ....controller.location import NULL, Location, trans
 from . import codes
 from . import gpl_class, shared
+from .members import stored
 from .state import from_gpl_angles, solve_joints, to_gpl_angles, tool_pose
 
 CARTESIAN, ANGLES = 0, 1
@@ -170,37 +171,10 @@ class GplLocation:
         if frame is not None:
             frame.total()  # a loop through this location's frame chain is an error now
 
-    @property
-    def Config(self) -> int:
-        return self._config
-
-    @Config.setter
-    def Config(self, value) -> None:
-        self._config = int(value)
-
-    @property
-    def Text(self) -> str:
-        return self._text
-
-    @Text.setter
-    def Text(self, value) -> None:
-        self._text = str(value)
-
-    @property
-    def ZClearance(self) -> float:
-        return self._zclearance
-
-    @ZClearance.setter
-    def ZClearance(self, value) -> None:
-        self._zclearance = _number(value)
-
-    @property
-    def ZWorld(self) -> bool:
-        return self._zworld
-
-    @ZWorld.setter
-    def ZWorld(self, value) -> None:
-        self._zworld = bool(value)
+    Config = stored("_config", int)
+    Text = stored("_text", str)
+    ZClearance = stored("_zclearance", _number)
+    ZWorld = stored("_zworld", bool)
 
     # ------------------------------------------------------------ Angles members
     def Angle(self, axis) -> float:
@@ -361,13 +335,7 @@ class GplRefFrame:
         self._loc = location_arg(value)
         self.total()
 
-    @property
-    def Text(self) -> str:
-        return self._text
-
-    @Text.setter
-    def Text(self, value) -> None:
-        self._text = str(value)
+    Text = stored("_text", str)
 
     def total(self, depth: int = 0) -> Location:
         """The frame's total (absolute) pose."""

@@ -31,6 +31,7 @@ from ....controller.location import Location
 from ....errors import ProgramError
 from . import codes
 from . import gpl_class, shared
+from .members import stored
 from .locations import ANGLES, GplLocation, location_arg
 from .state import flange_pose, flange_target, from_gpl_angles, matrix_m, righty_of, robot_state
 
@@ -89,21 +90,8 @@ class GplProfile:
     def InRange(self, value) -> None:
         self._values["InRange"] = float(value)
 
-    @property
-    def Straight(self) -> bool:
-        return self._straight
-
-    @Straight.setter
-    def Straight(self, value) -> None:
-        self._straight = bool(value)
-
-    @property
-    def Text(self) -> str:
-        return self._text
-
-    @Text.setter
-    def Text(self, value) -> None:
-        self._text = str(value)
+    Straight = stored("_straight", bool)
+    Text = stored("_text", str)
 
     def Clone(self) -> "GplProfile":
         copy = GplProfile(self._rt)

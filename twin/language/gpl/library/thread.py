@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from . import codes
 from . import byref, gpl_class, shared
+from .members import stored
 from .state import robot_state
 
 FOREVER = -1
@@ -94,13 +95,7 @@ class GplThread:
     def StartProcedure(self) -> str:
         return _procedure_name(self._procedure)
 
-    @property
-    def Argument(self) -> float:
-        return self._argument
-
-    @Argument.setter
-    def Argument(self, value) -> None:
-        self._argument = float(value)
+    Argument = stored("_argument", float)
 
     @property
     def ThreadState(self) -> int:
