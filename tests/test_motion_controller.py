@@ -41,6 +41,12 @@ class Probe:
         c = self.sim.controller
         self.rows.append((t, c.joints(), c.q_command.copy(), dict(self.sim.io.state), c.moving))
 
+    def log_scalar(self, name: str, t: float, value: float) -> None:
+        """Signals are read from io.state in sample(); the recorder's stream is not needed."""
+
+    def log_text(self, t: float, text: str, level: str = "INFO", path: str = "program/log") -> None:
+        """Cell events are in the report; not needed here."""
+
 
 def run_on_cell(text: str, scene: Path = SCARA, locations: dict | None = None, max_time: float = 20.0):
     """Run V+ `text` on a cell (monitor speed 100 unless the program says otherwise)."""

@@ -237,3 +237,32 @@ def test_mesh_geom_uses_model_vertices():
     placed = mesh.vertices @ rot.reshape(3, 3).T + model.geom_pos[0]
     want = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
     assert np.abs(placed[:, None, :] - want[None]).max(axis=2).min(axis=1).max() < 1e-6
+
+
+def test_a_run_records_signals_and_cell_events_at_their_times(tmp_path):
+    """twin run with --rrd: each digital signal change is a 0/1 scalar at the time the
+    program set it, and the cell's events (part presented, grasp, release...) are text
+    lines at their times."""
+    from twin.runner import run_program
+
+    program = tmp_path / "sig.pg"
+    program.write_text(""".PROGRAM sig()
+    SIGNAL 1
+    TIMER 1 = 0
+    WAIT TIMER(1) >= 0.5
+    SIGNAL -1, 2010
+.END
+""")
+    path = tmp_path / "run.rrd"
+    result = run_program(program, rrd_path=path)
+    assert result.report.errors == []
+    rrd = read_rrd(path)
+    out1 = timed(rrd["/signals/1"])
+    assert [v[0] for v in out1["Scalars:scalars"]] == [1.0, 0.0]
+    t_on, t_off = (t * 1e-9 for t in out1["sim_time"])
+    assert t_off - t_on == pytest.approx(0.5, abs=0.0161)  # the WAIT, to the 16 ms cycle
+    assert [v[0] for v in timed(rrd["/signals/2010"])["Scalars:scalars"]] == [1.0]
+    events = timed(rrd["/cell/events"])
+    first = result.report.events[0]
+    assert events["TextLog:text"][0][0].startswith(f"{first['kind']}: ")
+    assert events["sim_time"][0] * 1e-9 == pytest.approx(first["time"], abs=1e-9)

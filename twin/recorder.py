@@ -15,6 +15,8 @@ Entity layout in the viewer::
     robot/joints/<joint>              joint positions as scalars (hinge: degrees, slide: mm,
                                       as the controller reports them)
     program/log                       TYPE output and errors (TextLog)
+    cell/events                       grasp, release, slip, drop, collision... (TextLog)
+    signals/<n>                       digital signals as 0/1 scalars, at each change
     <name>                            anything sent with ``log_scalar``
 
 Bodies are flat under ``world`` (each carries its world pose, not a pose relative to
@@ -229,12 +231,13 @@ class Recorder:
         if self._k == self.chunk_frames:
             self._flush_frames()
 
-    def log_text(self, sim_time: float, text: str, level: str = "INFO") -> None:
-        """A line of program output or an error, at `sim_time` (sent at once: it is rare)."""
+    def log_text(self, sim_time: float, text: str, level: str = "INFO", path: str = "program/log") -> None:
+        """A line of program output, an error or a cell event, at `sim_time` (sent at once:
+        it is rare)."""
         if not self.enabled or self._closed:
             return
         self.rec.set_time(TIMELINE, duration=sim_time)
-        self.rec.log("program/log", rr.TextLog(text, level=level))
+        self.rec.log(path, rr.TextLog(text, level=level))
 
     def log_scalar(self, name: str, sim_time: float, value: float) -> None:
         """One sample of a signal; buffered and sent with send_columns."""

@@ -51,6 +51,7 @@ class Simulation:
         self.io = DigitalIO()
         self.scheduler = Scheduler()
         self.recorder = recorder
+        self._events_recorded = 0  # cell events already sent to the recorder
         self.settle_s = float(controller_cfg.get("settle_after_program_s", 3.0))
 
     def taught_locations(self) -> dict[str, Location]:
@@ -95,9 +96,27 @@ class Simulation:
                 error = self._stop_for_collision(collisions[0])
                 if error is not None:  # no program was running to take it
                     errors.append(error.as_dict(cell.time))
-            if self.recorder is not None and self.recorder.wants_frame(cell.time):
-                self.recorder.sample(cell.time, cell.data)
+            self._record()
         return RunOutcome(cell.time, time.perf_counter() - wall_start, program_end, errors)
+
+    def _record(self) -> None:
+        """Once per major cycle: a recording frame when one is due, and the digital signals
+        and cell events (grasp, release, slip, drop, collision...) of the cycle, at their
+        times.  Without a recorder the signal changes are dropped so they do not pile up."""
+        cell, recorder, changes = self.cell, self.recorder, self.io.changes
+        if recorder is None:
+            changes.clear()
+            return
+        for number, value in changes:
+            recorder.log_scalar(f"signals/{number}", cell.time, float(value))
+        changes.clear()
+        events = cell.events
+        for event in events[self._events_recorded:]:
+            detail = ", ".join(f"{k}={v}" for k, v in event.items() if k not in ("t", "kind"))
+            recorder.log_text(event["t"], f"{event['kind']}: {detail}", path="cell/events")
+        self._events_recorded = len(events)
+        if recorder.wants_frame(cell.time):
+            recorder.sample(cell.time, cell.data)
 
     def _stop_for_collision(self, collision: dict) -> ProgramError | None:
         """The robot hit something: it stops where it is, and each running program stops with
