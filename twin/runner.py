@@ -11,6 +11,7 @@ Python or a notebook:
 from __future__ import annotations
 
 import tempfile
+import uuid
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -46,12 +47,12 @@ def _open_recorder(sim: Simulation, rrd_path: str | Path | None):
 
 def _sandbox(program: Path, output: str | Path | None) -> Path:
     """The folder a program's file I/O is confined to (V+ ATTACH "DISK", GPL /flash...):
-    `<program>-files` beside the report or recording, else a temporary folder."""
+    `<program>-files` beside the report or recording, else a fresh folder in the temporary
+    directory.  It is created by the first file written, so a run without file I/O leaves
+    nothing behind."""
     if output is None:
-        return Path(tempfile.mkdtemp(prefix="twin-files-"))
-    sandbox = Path(output).resolve().parent / f"{program.stem}-files"
-    sandbox.mkdir(parents=True, exist_ok=True)
-    return sandbox
+        return Path(tempfile.gettempdir()) / f"twin-files-{uuid.uuid4().hex[:12]}"
+    return Path(output).resolve().parent / f"{program.stem}-files"
 
 
 def _start_vplus(sim: Simulation, program: Path, main: str | None, console: Console | None,
