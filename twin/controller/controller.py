@@ -222,6 +222,7 @@ class VirtualController:
         self._destination = self._location_of(self.q_command)
         self._righty_request: bool | None = None
         self._hand_request: str | None = None
+        self.hand_state = "open"  # the valves as last driven: HAND() (the jaws start open)
         self.prismatic = np.array([cell.model.joint(n).type == 2 for n in cell.robot_joint_names])
         # FINE tolerance per joint, in joint units (rad or m).
         self.fine = np.where(self.prismatic, 2e-5, 1e-4)
@@ -322,6 +323,21 @@ class VirtualController:
         if righty is None:
             righty = self.kin.is_righty(self.cell.robot_qpos() if select == 0 else self._q_planned)
         return CONFIG_RIGHTY if righty else 0
+
+    def configuration_of(self, values) -> int:
+        """SOLVE.FLAGS: the CONFIG bits of a precision point (joint values, degrees and mm)."""
+        if self.kin.scara is None:
+            return 0
+        return CONFIG_RIGHTY if self.kin.is_righty(self.from_user_joints(values)) else 0
+
+    def solve_angles(self, target: Location, seed, flags: int) -> tuple[tuple[float, ...], int]:
+        """SOLVE.ANGLES: the joint values (degrees, mm) and their CONFIG bits that put the tool
+        tip at `target` (TOOL and BASE applied), nearest the `seed` joint values, in the
+        configuration the CONFIG bits `flags` ask for.  Raises KinematicsError."""
+        righty = None if self.kin.scara is None else bool(int(flags) & CONFIG_RIGHTY)
+        q = self.kin.ik(self._flange_matrix_m(target), self.from_user_joints(seed), righty=righty)
+        values = self.to_user_joints(q)
+        return values, self.configuration_of(values)
 
     def inrange(self, target) -> int:
         """INRANGE(location): 0 when the next joint motion could reach `target` (a Location or
@@ -650,6 +666,7 @@ class VirtualController:
 
     def hand(self, state: str) -> None:
         """Drive the gripper valves: 'open', 'close' or 'relax'."""
+        self.hand_state = state
         self.cell.set_gripper(closed=(state == "close"))
 
 

@@ -314,8 +314,10 @@ class IoStatement(Statement):
 @dataclass
 class KeyedAssign(Statement):
     """An instruction that assigns what it names: BITS 1, 8 = 255,
-    DECOMPOSE parts[] = loc, SWITCH CP = SIG(1001), TIMER 1 = 0."""
+    DECOMPOSE parts[] = loc, SWITCH CP = SIG(1001), TIMER 1 = 0.
+    SOLVE.ANGLES has more values after "=": loc, seed[], flags."""
 
     name: str  # upper case
     args: list[Expr | None]
     value: Expr
+    more: list[Expr] = field(default_factory=list)  # the values after the first

@@ -23,7 +23,7 @@ from . import messages as msg
 from .keywords import INSTRUCTIONS, NAME_ARGUMENTS, WRITES_FIRST_ARGUMENT, arity
 
 FORMAT_ARGUMENTS = {"$ENCODE"}  # arguments are TYPE items: expressions and /I0, /F8.3 ...
-ARRAY_ARGUMENTS = {"$UNPACK"}  # the first argument $a[i] is passed as (array, index)
+ARRAY_ARGUMENTS = {"$UNPACK", "SOLVE.FLAGS"}  # the first argument a[i] (a[]) is passed as (array, index)
 FORMAT_CODES = set("SCXBUNDFEGHOI")  # formats.py renders each of them
 LIBRARY_CALLS = WRITES_FIRST_ARGUMENT | NAME_ARGUMENTS | FORMAT_ARGUMENTS | ARRAY_ARGUMENTS
 
@@ -79,19 +79,39 @@ class LibraryStatements:
         spec = INSTRUCTIONS.get(s.name)
         if spec is None:
             raise self.error(s, msg.UNKNOWN_KEYWORD, s.name)
-        fewest, most = arity(spec.function)  # the value after "=" is the first
-        self.argument_count(f"{s.name} ... =", s.args, max(fewest - 1, 0), most - 1)
-        args = []
-        for a in s.args:
-            if a is None:
-                args.append("None")
-            elif spec.names and isinstance(a, ast.Var):
-                args.append(repr(a.name.upper()))
-            elif spec.targets and isinstance(a, ast.Var) and a.indices is not None:
-                args.append(self.array_ref(a))
+        values = [s.value, *s.more]  # the values after "=" come first
+        fewest, most = arity(spec.function)
+        self.argument_count(f"{s.name} ... =", s.args, max(fewest - len(values), 0), most - len(values))
+        passed = []
+        for i, v in enumerate(values):
+            if i in spec.array_values:
+                if not isinstance(v, ast.Var) or v.indices is None:
+                    raise self.error(s, msg.INVALID_ARGUMENT, f"{s.name} needs an array")
+                passed.append(self.array_ref(v))
             else:
-                args.append(self.expr(a))
-        self.emit(depth, f"I[{s.name!r}](rt, {self.expr(s.value)}{''.join(', ' + a for a in args)})")
+                passed.append(self.expr(v))
+        writes = []  # (position, variable) of the plain variables the instruction sets
+        for i, a in enumerate(s.args):
+            if a is None:
+                passed.append("None")
+            elif spec.names and isinstance(a, ast.Var):
+                passed.append(repr(a.name.upper()))
+            elif spec.targets and isinstance(a, ast.Var) and a.indices is not None:
+                passed.append(self.array_ref(a))
+            elif spec.writes_back and isinstance(a, ast.Var):
+                passed.append(self.peek(a))
+                writes.append((i, a))
+            else:
+                passed.append(self.expr(a))
+        call = f"I[{s.name!r}](rt{''.join(', ' + a for a in passed)})"
+        if not writes:
+            self.emit(depth, call)
+            return
+        result = self.fresh("kw")
+        self.emit(depth, f"{result} = {call}")
+        for i, var in writes:
+            self.emit(depth, f"if {result} is not None and {result}[{i}] is not None:")
+            self.assign(var, f"{result}[{i}]", depth + 1)
 
     def wait_for_input(self, node, depth: int) -> None:
         """Wait before a simple statement, or before a condition (IF, WHILE,
@@ -137,7 +157,7 @@ class LibraryStatements:
             return f"F[{e.name!r}](rt{''.join(', ' + self.io_item(a) for a in e.args)})"
         if e.name in ARRAY_ARGUMENTS:
             first = e.args[0] if e.args else None
-            if not isinstance(first, ast.Var) or not first.indices:
+            if not isinstance(first, ast.Var) or first.indices is None or (e.name == "$UNPACK" and not first.indices):
                 raise self.error(self.current, msg.INVALID_ARGUMENT, f"{e.name} needs an array element")
             rest = "".join(", " + ("None" if a is None else self.expr(a)) for a in e.args[1:])
             return f"F[{e.name!r}](rt, {self.array_ref(first)}{rest})"

@@ -257,8 +257,8 @@ class _ToAst(Transformer_NonRecursive):  # long expressions make deep trees
         return ast.IoStatement(str(name).upper(), unit, [i for i in items if i is not None], **_pos(meta))
 
     def keyed_assignment(self, meta, children):
-        name, args, value = children
-        return ast.KeyedAssign(str(name).upper(), args, value, **_pos(meta))
+        name, args, value, *more = children
+        return ast.KeyedAssign(str(name).upper(), args, value, more, **_pos(meta))
 
     def encode_call(self, meta, children):
         return ast.Call("$ENCODE", [c for c in children[1:] if c is not None])

@@ -32,6 +32,11 @@ class InstructionSpec:
     # as (array, index).
     targets: bool = False
     returns_unit: bool = False  # ATTACH (lun, 4): the unit number it returns goes into `lun`
+    # SOLVE.ANGLES jts[], flags, error = loc, seed[], 0: the values after "=" at these
+    # positions are arrays, passed as (array, index), and the plain variables before "="
+    # get what the instruction returns at their position (a tuple, None: unchanged).
+    array_values: tuple[int, ...] = ()
+    writes_back: bool = False
 
 
 INSTRUCTIONS: dict[str, InstructionSpec] = {}
@@ -73,9 +78,10 @@ def arity(fn: Callable) -> tuple[int, float]:
 
 
 def instruction(name: str, waits: bool = False, names: bool = False, targets: bool = False,
-                returns_unit: bool = False):
+                returns_unit: bool = False, array_values: tuple[int, ...] = (), writes_back: bool = False):
     def register(function):
-        INSTRUCTIONS[name] = InstructionSpec(function, waits, names, targets, returns_unit)
+        INSTRUCTIONS[name] = InstructionSpec(function, waits, names, targets, returns_unit,
+                                             array_values, writes_back)
         return function
 
     return register
@@ -94,4 +100,4 @@ def function(name: str, writes_first: bool = False, names: bool = False):
 
 
 # The domain modules register themselves on import (after the registry exists).
-from . import files, locations, motion, numbers, program, strings, system  # noqa: E402,F401
+from . import files, locations, motion, numbers, program, solve, strings, system  # noqa: E402,F401
