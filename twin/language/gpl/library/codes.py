@@ -57,6 +57,16 @@ def fail(code: tuple[int, str], detail: str = "") -> GplError:
     return GplError(number, f"{message}: {detail}" if detail else message)
 
 
+def object_arg(value, cls: type, what: str):
+    """`value` as an object of class `cls` ("a Location", "an IPEndPoint": `what`): Nothing
+    and an object of another class are the GPL errors for a bad object argument."""
+    if value is None:
+        raise fail(NOTHING_ARGUMENT, f"{what} is Nothing")
+    if not isinstance(value, cls):
+        raise fail(INVALID_ARGUMENT, f"{what} is needed")
+    return value
+
+
 def from_controller(err) -> GplError:
     """A controller ProgramError (V+ code and *text*) as the GPL error."""
     code = _FROM_VPLUS.get(err.code)

@@ -288,11 +288,7 @@ def _axis_index(axis) -> int:
 
 
 def location_arg(value) -> GplLocation:
-    if value is None:
-        raise codes.fail(codes.NOTHING_ARGUMENT, "a Location is Nothing")
-    if not isinstance(value, GplLocation):
-        raise codes.fail(codes.INVALID_ARGUMENT, "a Location is needed")
-    return value
+    return codes.object_arg(value, GplLocation, "a Location")
 
 
 

@@ -101,11 +101,7 @@ class GplProfile:
 
 
 def profile_arg(value) -> GplProfile:
-    if value is None:
-        raise codes.fail(codes.NOTHING_ARGUMENT, "a Profile is Nothing")
-    if not isinstance(value, GplProfile):
-        raise codes.fail(codes.INVALID_ARGUMENT, "a Profile is needed")
-    return value
+    return codes.object_arg(value, GplProfile, "a Profile")
 
 
 # ------------------------------------------------------------ shared helpers

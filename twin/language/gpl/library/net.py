@@ -68,11 +68,7 @@ class IPEndPoint:
 
 
 def _endpoint(rt, value) -> IPEndPoint:
-    if value is None:
-        raise codes.fail(codes.NOTHING_ARGUMENT, "an IPEndPoint is Nothing")
-    if not isinstance(value, IPEndPoint):
-        raise codes.fail(codes.INVALID_ARGUMENT, "an IPEndPoint is needed")
-    return value
+    return codes.object_arg(value, IPEndPoint, "an IPEndPoint")
 
 
 def _socket_error(err: OSError) -> Exception:
