@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from twin.errors import ProgramError
 from twin.runner import run_program
 
 from conftest import SCARA_SCENE as SCENE
@@ -115,3 +116,192 @@ def test_boot_state_and_power_enabled_with_a_timeout(tmp_path):
     lines = report.output.splitlines()
     assert lines[:2] == ["False False", "True True"]
     assert lines[2] in ("1", "2")
+
+
+# ------------------------------------------------------------ declarations and arrays
+def test_redim_and_redim_preserve():
+    """ReDim gives new bounds (manual L766-817); ReDim Preserve (GPL Dictionary, ReDim
+    statement) keeps the elements inside both the old and the new bounds."""
+    out = output_of("""
+Module M
+    Public Sub Main()
+        Dim a(2) As Integer
+        Dim g(1, 1) As String
+        a(0) = 5
+        a(2) = 7
+        ReDim Preserve a(4)
+        Console.WriteLine(a(0) & " " & a(2) & " " & a(4) & " " & a.GetUpperBound(0))
+        ReDim Preserve a(1)
+        Console.WriteLine(a(0) & " " & a.Length)
+        ReDim a(3)
+        Console.WriteLine(a(0) & " " & a.Length)
+        g(1, 1) = "x"
+        ReDim Preserve g(2, 3)
+        Console.WriteLine(g(1, 1) & g(2, 3) & "|")
+    End Sub
+End Module
+""")
+    assert out == "5 7 0 4\n5 2\n0 4\nx|\n"
+
+
+def test_dim_inside_blocks_as_precise_code_writes_it():
+    """A Dim inside If, For, Select, While and Try bodies (Precise's sample code does
+    this; VB.NET block scope): each works, and its initialiser runs each time."""
+    out = output_of("""
+Module M
+    Public Sub Main()
+        Dim i As Integer
+        For i = 1 To 3
+            Dim sq As Integer = i * i
+            If sq > 1 Then
+                Dim msg As String = "sq=" & sq
+                Console.WriteLine(msg)
+            End If
+        Next
+        Select Case i
+            Case 4
+                Dim four As New Location
+                four.X = 4
+                Console.WriteLine(CStr(four.X))
+        End Select
+        Try
+            Dim z As Double = 1.5
+            Console.WriteLine(CStr(z))
+        Catch
+        End Try
+        If True Then
+            Dim msg As String
+            Console.WriteLine("again " & msg)
+        End If
+    End Sub
+End Module
+""")
+    assert out == "sq=4\nsq=9\n4\n1.5\nagain sq=9\n"
+
+
+def test_class_const_inside_its_class_its_shared_bounds_and_outside():
+    """A class `Public Const` (manual L756-762: constants) is a name inside its class,
+    including in its own Shared array bounds, and Class.Const outside."""
+    out = output_of("""
+Class Buf
+    Public Const SIZE As Integer = 4
+    Public Shared cells(SIZE) As Integer
+    Public Function Cap() As Integer
+        Return SIZE * 2
+    End Function
+End Class
+Module M
+    Public Sub Main()
+        Dim b As New Buf
+        Console.WriteLine(Buf.SIZE & " " & b.Cap() & " " & Buf.cells.GetUpperBound(0))
+    End Sub
+End Module
+""")
+    assert out == "4 8 4\n"
+
+
+def test_module_const_from_another_modules_member_whatever_the_file_order(tmp_path):
+    """ch. 10 "Special Initialization": module variables are initialised module by module
+    in load order; a Const that uses a Const of a module loaded later still gets its value
+    (constants are set first, in the order they need each other)."""
+    folder = tmp_path / "p"
+    folder.mkdir()
+    (folder / "Project.gpr").write_text('ProjectBegin\nProjectName="p"\nProjectStart="Main"\n'
+                                       'ProjectSource="A.gpl"\nProjectSource="B.gpl"\nProjectEnd\n')
+    (folder / "A.gpl").write_text("Module A\n    Public Const Two As Integer = B.One * 2\n"
+                                  "    Public Const Label As String = \"n=\" & B.One\n"
+                                  "    Public Sub Main()\n        Console.WriteLine(Label & \" \" & CStr(Two))\n"
+                                  "    End Sub\nEnd Module\n")
+    (folder / "B.gpl").write_text("Module B\n    Public Const One As Integer = 1\nEnd Module\n")
+    from gpl_helpers import run_project
+    system, thread = run_project(folder)
+    assert thread.error is None
+    assert system.console.output == "n=1 2\n"
+
+
+def test_constants_that_need_each_other_are_a_located_error():
+    with pytest.raises(ProgramError) as caught:
+        output_of("""
+Module A
+    Public Const X As Integer = B.Y
+    Public Sub Main()
+    End Sub
+End Module
+Module B
+    Public Const Y As Integer = A.X + 1
+End Module
+""")
+    assert caught.value.code == -2006 and caught.value.line == 3 and "B.Y" in caught.value.text
+
+
+def test_goto_out_of_a_try_block_runs_its_finally():
+    """GoTo out of a Try (or Catch) block to an enclosing label (field code does it; VB.NET
+    runs the Finally on the way out); into a block and out of a Finally stay -2011 (L1733)."""
+    out = output_of("""
+Module M
+    Public Sub Main()
+        Dim n As Integer
+        Try
+            n = 1
+            GoTo done
+        Catch
+        Finally
+            Console.WriteLine("finally")
+        End Try
+        n = 2
+done:
+        Try
+            Throw New Exception(-786)
+        Catch
+            GoTo out
+        End Try
+out:
+        Console.WriteLine(CStr(n))
+    End Sub
+End Module
+""")
+    assert out == "finally\n1\n"
+    with pytest.raises(ProgramError) as caught:
+        output_of("""
+Module M
+    Public Sub Main()
+        Try
+        Finally
+            GoTo over
+        End Try
+over:
+    End Sub
+End Module
+""")
+    assert caught.value.code == -2011
+
+
+def test_line_continuation_without_a_blank_before_the_underscore():
+    """` _` continues a line (manual L1130-ish, ch. 4); Brooks' own code writes `,_`."""
+    out = output_of("""
+Module M
+    Public Sub Main()
+        Console.WriteLine(Add(1,_
+            2) & "|" & my_name())
+    End Sub
+    Function Add(ByVal a As Integer,_
+                 ByVal b As Integer) As Integer
+        Return a + b
+    End Function
+    Function my_name() As String
+        Return "x_"
+    End Function
+End Module
+""")
+    assert out == "3|x_\n"
+
+
+def test_write_only_built_in_properties(tmp_path):
+    """Robot.RapidDecel is write-only (GPL Dictionary): assigning it compiles and runs;
+    reading it is the compiler's undefined symbol."""
+    report = on_cell(tmp_path, """
+        Robot.RapidDecel = True
+        Console.WriteLine("ok")
+""")
+    assert report.errors == []
+    assert report.output == "ok\n"

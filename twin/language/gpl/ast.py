@@ -183,6 +183,7 @@ class Throw(Statement):
 @dataclass
 class ReDim(Statement):
     targets: list[Expr]
+    preserve: bool = False
 
 
 @dataclass

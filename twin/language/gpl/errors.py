@@ -42,6 +42,7 @@ STRING_TOO_LONG = -707
 INVALID_NUMBER = -708
 ME_UNDEFINED = -709
 UNDEFINED_PROCEDURE = -710
+OUT_OF_MEMORY = -711
 STACK_OVERFLOW = -712
 INVALID_EXCEPTION = -807  # GPL Dictionary, Throw of an ErrorCode 0
 PROJECT_ERROR = -786  # "Project generated error", reserved for applications
@@ -69,6 +70,7 @@ MESSAGES = {
     INVALID_NUMBER: "Invalid numeric value",
     ME_UNDEFINED: "Me is not defined in this procedure",
     UNDEFINED_PROCEDURE: "Undefined procedure",
+    OUT_OF_MEMORY: "Out of memory",
     STACK_OVERFLOW: "Stack overflow: too many nested procedure calls",
     INVALID_EXCEPTION: "Invalid exception",
     PROJECT_ERROR: "Project generated error",

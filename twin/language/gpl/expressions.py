@@ -119,6 +119,7 @@ class ExpressionCompiler(Scope):
         self.try_depth = 0
         self.me_available = proc is not None and proc.instance
         self.depth = 1  # where hoisted code (ByRef write-backs) goes
+        self.references: set[str] = set()  # module and Shared variables read (Const order)
 
     # ------------------------------------------------------------ output
     def emit(self, depth: int, text: str) -> None:
@@ -201,9 +202,10 @@ class ExpressionCompiler(Scope):
         arg_codes = [self.expr(a)[0] for a in (args or [])]
         if ot is not None and ot.base == "ns":
             owner = ot.ref
-            if isinstance(owner, type):  # a built-in class: a shared property
-                attr = self.library_attr(owner, key, target)
-                setter = library_member(owner, "set_" + attr)
+            if isinstance(owner, type):  # a built-in class: a shared property (maybe write-only)
+                setter = library_member(owner, "set_" + key)
+                if setter is None:
+                    self.library_attr(owner, key, target)
                 if setter is None:
                     raise self.fail(INVALID_STATEMENT, f"{owner.gpl_name}.{target.name} is read-only", target)
                 self.emit(depth, f"L_{owner.gpl_name.lower()}.{setter}(rt, {', '.join(arg_codes + [code])})")
@@ -353,6 +355,8 @@ class ExpressionCompiler(Scope):
         raise self.fail(TYPE_MISMATCH, f"{e.name} is not a value", e)
 
     def var_code(self, var: VarSym) -> str:
+        if var.kind in ("module", "shared"):
+            self.references.add(var.py)
         if var.kind == "field":
             return f"{self.me_code()}.{var.py}"
         if var.byref:
@@ -659,6 +663,7 @@ class ExpressionCompiler(Scope):
                 return self.call_proc(sym, None, args, e, statement)
             if isinstance(sym, VarSym):
                 t = sym.type
+                self.references.add(sym.py)
                 if args:
                     return f"{sym.py}[{self.indices(args)}]", t.element
                 return sym.py, t
@@ -677,6 +682,8 @@ class ExpressionCompiler(Scope):
             sym = self.class_member(ot.ref, key, func)
             if isinstance(sym, VarSym):
                 where = sym.py if sym.kind == "shared" else f"{ocode}.{sym.py}"
+                if sym.kind == "shared":
+                    self.references.add(sym.py)
                 if args:
                     if sym.type.is_array:
                         return f"{where}[{self.indices(args)}]", sym.type.element

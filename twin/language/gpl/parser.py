@@ -42,6 +42,11 @@ def _code_part(line: str) -> str:
     return line
 
 
+# `Add(1,_` : a line continuation written without the blank before the underscore, after
+# a character that cannot end a name (Precise's and Brooks' code does this).
+_TIGHT_CONTINUATION = re.compile(r"(?<=[^\w\s])_$")
+
+
 def prepare(text: str) -> str:
     """Blank comments, `#` lines and REM lines (keeping line numbers); mark continuations."""
     text = text.removeprefix("\ufeff").removeprefix("\xef\xbb\xbf")  # a byte-order mark from a Windows editor
@@ -53,6 +58,7 @@ def prepare(text: str) -> str:
             out.append("")
             continue
         code = _code_part(raw).rstrip()
+        code = _TIGHT_CONTINUATION.sub(" _", code)
         if code and not code.endswith(" _") and _OPEN_END.search(code) and not code.lstrip().endswith(":"):
             code += " _"
         out.append(code)
@@ -226,7 +232,8 @@ class _ToAst(Transformer):
         return ast.Throw(value=c[0], **_pos(meta))
 
     def redim(self, meta, c):
-        return ast.ReDim(targets=list(c), **_pos(meta))
+        preserve, *targets = c
+        return ast.ReDim(targets=targets, preserve=preserve is not None, **_pos(meta))
 
     def if_line(self, meta, c):
         cond, then, orelse = c

@@ -21,6 +21,7 @@ from .scope import mangle
 from .symbols import SType, VarSym
 from .values import CONVERT, DEFAULTS
 
+FINALLY = "finally"
 SLICE_ITERATIONS = 1024  # loop iterations between time slices, as for V+ tasks
 
 
@@ -41,7 +42,7 @@ class _Block:
 
     ident: int
     labels: dict[str, int]  # label -> segment
-    boundary: bool = False  # a Try/Catch/Finally edge: GoTo may not cross it
+    boundary: object = False  # True: a Try or Catch body; FINALLY: a Finally body, no GoTo out
 
 
 @dataclass
@@ -73,15 +74,16 @@ def _contains(body: list, kinds: tuple) -> bool:
 
 
 def _nested_bodies(s) -> list[list]:
+    """The statement lists inside s, in source order."""
     out = []
-    for attr in ("body", "orelse", "catch_body", "finally_body", "default"):
-        inner = getattr(s, attr, None)
-        if isinstance(inner, list):
-            out.append(inner)
     if isinstance(s, ast.If):
         out.extend(b for _, b in s.branches)
     if isinstance(s, ast.Select):
         out.extend(b for _, b in s.cases)
+    for attr in ("body", "catch_body", "finally_body", "orelse", "default"):
+        inner = getattr(s, attr, None)
+        if isinstance(inner, list):
+            out.append(inner)
     return out
 
 
@@ -181,16 +183,13 @@ class ProcCompiler(ExpressionCompiler):
         self.finish()
 
     def collect_locals(self, body: list[ast.Statement]) -> None:
-        """Declarations are allowed at the outermost level only (ch. 4) and their
-        scope is the whole procedure."""
-        for s in body:
-            if isinstance(s, ast.Declare):
-                self.declare_locals(s)
+        """Every Dim of the procedure, also one inside a block (If, For, Select... as
+        Precise's own code writes them): its scope is the whole procedure, and the
+        same name declared in two blocks with the same type is one variable."""
         top = {id(s) for s in body}
         for s in _walk(body):
-            if isinstance(s, ast.Declare) and id(s) not in top:
-                raise self.fail(INVALID_STATEMENT, "variables can only be declared in the outermost "
-                                "level of a procedure (ch. 4)", s)
+            if isinstance(s, ast.Declare):
+                self.declare_locals(s, nested=id(s) not in top)
             if isinstance(s, ast.Try) and s.catch_type is not None:
                 self.declare_implicit(s.catch_var, s.catch_type, s)
             if isinstance(s, ast.For) and s.var_type is not None and isinstance(s.var, ast.Name):
@@ -201,11 +200,14 @@ class ProcCompiler(ExpressionCompiler):
         if name.lower() not in self.locals:
             self.locals[name.lower()] = VarSym(name, self.resolve_type(type_ref, node), "local", f"l_{name.lower()}")
 
-    def declare_locals(self, s: ast.Declare) -> None:
+    def declare_locals(self, s: ast.Declare, nested: bool = False) -> None:
         for d in s.items:
-            if d.key in self.locals:
-                raise self.fail(DUPLICATE_SYMBOL, d.name, d)
             t = self.declarator_type(d)
+            known = self.locals.get(d.key)
+            if known is not None:
+                if nested and known.kind == "local" and known.type == t and known.decl is not None:
+                    continue  # the same block variable declared again in another block
+                raise self.fail(DUPLICATE_SYMBOL, d.name, d)
             if "static" in s.modifiers:
                 py = f"T_{mangle(self.py, d.key)}"
                 self.project.statics[py] = None if t.rank else self.default(t)
@@ -546,7 +548,7 @@ class ProcCompiler(ExpressionCompiler):
             self.emit(depth + 1, "raise")
             self.emit(depth, "finally:")
             self.emit(depth + 1, f"if {flag} is None:")
-            self.blocks.append(_Block(-1, {}, True))
+            self.blocks.append(_Block(-1, {}, FINALLY))
             self.block(s.finally_body, depth + 2)
             self.blocks.pop()
 
@@ -567,8 +569,8 @@ class ProcCompiler(ExpressionCompiler):
             if s.label in block.labels:
                 self.emit(depth, f"raise _Jump({block.ident}, {block.labels[s.label]})")
                 return
-            if block.boundary:
-                break
+            if block.boundary is FINALLY:
+                break  # out of a Try or a Catch is allowed (its Finally runs), out of a Finally not
         if self.label_exists(s.label):
             raise self.fail(ILLEGAL_GOTO, f"GoTo {s.label}", s)
         raise self.fail(UNDEFINED_SYMBOL, f"label {s.label}", s)
@@ -647,4 +649,4 @@ class ProcCompiler(ExpressionCompiler):
             default = self.default(t.element) if t is not None else None
             if t is not None and len(target.args) != t.rank:
                 raise self.fail(INVALID_STATEMENT, "ReDim cannot change the rank of an array", s)
-            self.store(target.func, f"_redim({code}, ({dims},), {default!r})", t, depth)
+            self.store(target.func, f"_redim({code}, ({dims},), {default!r}, {s.preserve})", t, depth)

@@ -11,11 +11,16 @@ rounding (ch. 8: 7.875 stored in an Integer is 8).
 
 from __future__ import annotations
 
+import itertools
 import math
 import struct
 
-from .errors import DIVIDE_BY_ZERO, INVALID_NUMBER, OVERFLOW, SUBSCRIPT_RANGE, TYPE_MISMATCH, fail
+from .errors import DIVIDE_BY_ZERO, INVALID_NUMBER, OUT_OF_MEMORY, OVERFLOW, SUBSCRIPT_RANGE, TYPE_MISMATCH, fail
 
+# The controller's memory, as limits (docs/gpl.md): an array has at most this many
+# elements, a String at most this many characters; beyond, -711 *Out of memory*.
+MAX_ARRAY_ELEMENTS = 1 << 22
+MAX_STRING_LENGTH = 1 << 24
 INTEGER_RANGES = {"integer": (-(2**31), 2**31 - 1), "short": (-32768, 32767), "byte": (0, 255)}
 
 
@@ -31,6 +36,8 @@ class GplArray:
             if d < -1:
                 raise fail(SUBSCRIPT_RANGE, f"upper bound {d}")
             size *= d + 1
+        if size > MAX_ARRAY_ELEMENTS:
+            raise fail(OUT_OF_MEMORY, f"an array of {size:,} elements (at most {MAX_ARRAY_ELEMENTS:,})")
         self.data = [default] * size
         self.element = default
 
@@ -75,11 +82,15 @@ class GplArray:
             raise fail(SUBSCRIPT_RANGE, f"dimension {d}")
         return self.dims[d]
 
-    def redim(self, dims: tuple[int, ...]) -> None:
-        """ReDim: new sizes, same rank, elements reset (there is no Preserve)."""
+    def redim(self, dims: tuple[int, ...], preserve: bool = False) -> None:
+        """ReDim: new sizes, same rank; the elements are reset, or with Preserve the ones
+        whose indices are inside both the old and the new bounds are kept."""
         if len(dims) != len(self.dims):
             raise fail(SUBSCRIPT_RANGE, "ReDim cannot change the rank of an array")
         fresh = GplArray(dims, self.element)
+        if preserve:
+            for index in itertools.product(*(range(min(a, b) + 1) for a, b in zip(self.dims, dims))):
+                fresh[index if len(index) > 1 else index[0]] = self[index if len(index) > 1 else index[0]]
         self.dims, self.data = fresh.dims, fresh.data
 
     @staticmethod
