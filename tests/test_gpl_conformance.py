@@ -235,45 +235,42 @@ End Module
 
 
 def test_goto_out_of_a_try_block_runs_its_finally():
-    """GoTo out of a Try (or Catch) block to an enclosing label (field code does it; VB.NET
-    runs the Finally on the way out); into a block and out of a Finally stay -2011 (L1733)."""
+    """GoTo out of a Try's statements to an enclosing label, as field code does (VB.NET runs
+    the Finally on the way out); the manual's own illegal cases stay -2011 (L1717-1736:
+    out of the Catch, `GoTo bad_jump ' ILLEGAL!!!`; into a block; out of a Finally)."""
     out = output_of("""
 Module M
     Public Sub Main()
         Dim n As Integer
         Try
             n = 1
-            GoTo done
+            If n = 1 Then
+                GoTo done
+            End If
         Catch
         Finally
             Console.WriteLine("finally")
         End Try
         n = 2
 done:
-        Try
-            Throw New Exception(-786)
-        Catch
-            GoTo out
-        End Try
-out:
         Console.WriteLine(CStr(n))
     End Sub
 End Module
 """)
     assert out == "finally\n1\n"
-    with pytest.raises(ProgramError) as caught:
-        output_of("""
+    for inside in ("Catch\n            GoTo over", "Finally\n            GoTo over"):
+        with pytest.raises(ProgramError) as caught:
+            output_of(f"""
 Module M
     Public Sub Main()
         Try
-        Finally
-            GoTo over
+        {inside}
         End Try
 over:
     End Sub
 End Module
 """)
-    assert caught.value.code == -2011
+        assert caught.value.code == -2011
 
 
 def test_line_continuation_without_a_blank_before_the_underscore():
@@ -305,3 +302,139 @@ def test_write_only_built_in_properties(tmp_path):
 """)
     assert report.errors == []
     assert report.output == "ok\n"
+
+
+# ------------------------------------------------------------ numeric semantics
+@pytest.mark.parametrize("statement", [
+    "a = big + 1", "a = big * 2", "a = -big - 2", "a += big", "a -= -big", "a *= 3",
+    "cells(1) = big + big", "cells(1) -= big + 2", "k.value = big + 1", "k.value -= big + 2", "a = Twice(big)",
+    "a = big \\ 0.5", "a = CDbl(big) * 4",
+])
+def test_integer_overflow_is_an_error_for_every_store(statement):
+    """Integer is 32-bit (Table 4-1); a value out of its range stored in an Integer (a
+    variable, an array element, a field, a Function's result) is -703 *Numeric overflow*,
+    as Short and Byte are; the program's Try/Catch sees it."""
+    out = output_of(f"""
+Class Counter
+    Public value As Integer
+End Class
+Module M
+    Function Twice(ByVal x As Integer) As Integer
+        Return x * 2
+    End Function
+    Public Sub Main()
+        Dim big As Integer = 2147483647
+        Dim a As Integer = 1000000000
+        Dim cells(2) As Integer
+        Dim k As New Counter
+        Try
+            {statement}
+            Console.WriteLine("no error " & a)
+        Catch ex As Exception
+            Console.WriteLine(CStr(ex.ErrorCode))
+        End Try
+    End Sub
+End Module
+""")
+    assert out == "-703\n"
+
+
+def test_integer_arithmetic_in_range_is_unchanged():
+    out = output_of("""
+Module M
+    Public Sub Main()
+        Dim a As Integer = 2147483646
+        Dim b As Short = 3
+        a += 1
+        b *= 2
+        Console.WriteLine(a & " " & b & " " & (a - 1) & " " & CStr(-2147483647 - 1))
+    End Sub
+End Module
+""")
+    assert out == "2147483647 6 2147483646 -2147483648\n"
+
+
+@pytest.mark.parametrize("expression", ["d * d", "d + d", "-d - d", "d / 1E-300", "d ^ 2", "CDbl(\"1E400\")"])
+def test_double_overflow_is_703_not_infinity(expression):
+    """Double overflow is -703 (docs/gpl.md error table, L1156), never INF: stored, shown
+    or converted."""
+    for use in (f"x = {expression}", f"Console.WriteLine({expression})", f"Console.WriteLine(CStr({expression}))"):
+        out = output_of(f"""
+Module M
+    Public Sub Main()
+        Dim d As Double = 1E308
+        Dim x As Double
+        Try
+            {use}
+            Console.WriteLine("no error " & x)
+        Catch ex As Exception
+            Console.WriteLine(CStr(ex.ErrorCode))
+        End Try
+    End Sub
+End Module
+""")
+        assert out == "-703\n", use
+
+
+def test_not_on_a_number_is_logical():
+    """Table 6-1: Not converts False (0) to True (-1) and any True (<> 0) value to False (0);
+    And / Or / Xor stay bitwise on numbers."""
+    out = output_of("""
+Module M
+    Public Sub Main()
+        Dim n As Integer = 5
+        Dim z As Integer = 0
+        Dim d As Double = 0.5
+        Console.WriteLine((Not n) & " " & (Not z) & " " & (Not d) & " " & (Not False) & " " & (6 And 3))
+        If Not n Then
+            Console.WriteLine("wrong")
+        Else
+            Console.WriteLine("Not 5 is False")
+        End If
+    End Sub
+End Module
+""")
+    assert out == "0 -1 0 True 2\nNot 5 is False\n"
+
+
+def test_compound_assignment_evaluates_its_target_once():
+    """`a(f()) += 1` calls f once (VB.NET semantics of compound assignment)."""
+    out = output_of("""
+Class Box
+    Public v(20) As Integer
+End Class
+Module M
+    Dim calls As Integer
+    Dim shared_box As New Box
+    Function F() As Integer
+        calls += 1
+        Return calls
+    End Function
+    Function GetBox() As Box
+        calls += 10
+        Return shared_box
+    End Function
+    Public Sub Main()
+        Dim a(5) As Integer
+        a(F()) += 7
+        Console.WriteLine(calls & " " & a(1))
+        GetBox().v(F()) += 2
+        Console.WriteLine(calls & " " & shared_box.v(12))
+    End Sub
+End Module
+""")
+    assert out == "1 7\n12 2\n"
+
+
+def test_character_constants_are_codes():
+    """Table 4-4: GPL_CR is the ASCII carriage return character (13), GPL_LF line feed (10);
+    the manual writes `Chr(GPL_CR) & Chr(GPL_LF)` (L2398)."""
+    out = output_of("""
+Module M
+    Public Sub Main()
+        Dim message As String = "Test message" & Chr(GPL_CR) & Chr(GPL_LF)
+        Console.WriteLine(CStr(GPL_CR + GPL_LF) & " " & message.Length & " " & Asc(message.Substring(12, 1)))
+    End Sub
+End Module
+""")
+    assert out == "23 14 13\n"

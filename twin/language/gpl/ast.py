@@ -36,6 +36,15 @@ class Nothing(Expr):
 
 
 @dataclass
+class Evaluated(Expr):
+    """Made by the compiler, not the parser: a value already computed into a Python
+    temporary (`a(f()) += 1` evaluates f() once)."""
+
+    code: str = ""
+    type: object = None
+
+
+@dataclass
 class Me(Expr):
     pass
 

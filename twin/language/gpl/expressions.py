@@ -32,10 +32,17 @@ if TYPE_CHECKING:
 
 # Predefined constants (ch. 4, Table 4-4).
 CONSTANTS = {
-    "gpl_cr": ("'\\r'", "string"), "gpl_lf": ("'\\n'", "string"),
+    "gpl_cr": ("13", "integer"), "gpl_lf": ("10", "integer"),  # character codes: Chr(GPL_CR)
     "gpl_righty": ("1", "integer"), "gpl_lefty": ("2", "integer"), "gpl_above": ("4", "integer"),
     "gpl_below": ("8", "integer"), "gpl_flip": ("16", "integer"), "gpl_noflip": ("32", "integer"),
     "gpl_single": ("4096", "integer"),
+}
+
+# Stores of an operator's result in an Integer or a Double check its range inline (a call
+# costs more): out of range (or a NaN) is -703 *Numeric overflow* (L1156).
+_RANGE_CHECKS = {
+    "integer": "(_v if -2147483648 <= (_v := {0}) <= 2147483647 else _overflow(_v, 'Integer'))",
+    "double": "(_v if -1.7976931348623157e308 <= (_v := {0}) <= 1.7976931348623157e308 else _overflow(_v, 'Double'))",
 }
 
 # Operators done by a helper of values.py, and the type of their result (Table 6-1).
@@ -120,6 +127,7 @@ class ExpressionCompiler(Scope):
         self.me_available = proc is not None and proc.instance
         self.depth = 1  # where hoisted code (ByRef write-backs) goes
         self.references: set[str] = set()  # module and Shared variables read (Const order)
+        self.arithmetic: set[str] = set()  # codes of operator results, range-checked when stored
 
     # ------------------------------------------------------------ output
     def emit(self, depth: int, text: str) -> None:
@@ -268,9 +276,13 @@ class ExpressionCompiler(Scope):
         base = target.base
         if base in CONVERT:
             if vt is not None and not vt.rank and vt.base == base:
+                if code in self.arithmetic and base in _RANGE_CHECKS:
+                    return _RANGE_CHECKS[base].format(code)  # Integer overflow / Double overflow: -703
                 return code
             if base == "double" and vt is not None and vt.is_number and vt.base != "single":
-                return code if vt.base == "double" else f"float({code})"
+                if vt.base == "double":
+                    return _RANGE_CHECKS["double"].format(code) if code in self.arithmetic else code
+                return f"float({code})"
             if vt is not None and vt.base in ("user", "lib", "delegate") and not vt.rank:
                 raise self.fail(TYPE_MISMATCH, f"{vt} assigned to a {target}")
             return f"{CONVERT[base]}({code})"
@@ -321,6 +333,9 @@ class ExpressionCompiler(Scope):
 
     def e_Nothing(self, e):
         return "None", SType("nothing")
+
+    def e_Evaluated(self, e: ast.Evaluated):
+        return e.code, e.type
 
     def e_Me(self, e):
         if not self.me_available:
@@ -454,16 +469,22 @@ class ExpressionCompiler(Scope):
             raise self.fail(TYPE_MISMATCH, f"{proc.name} does not match Delegate {dsym.name}", node)
 
     # ---- operators
+    def unchecked(self, code: str) -> str:
+        """An operator's result, which may be out of its type's range: checked when stored."""
+        self.arithmetic.add(code)
+        return code
+
     def e_Unary(self, e: ast.Unary):
         code, t = self.expr(e.operand)
         if e.op == "-":
             if t is not None and t.is_number:
-                return f"(-{code})", t
+                return self.unchecked(f"(-{code})"), t
             return f"_neg({code})", SType("double")
+        # Not is logical on any value (Table 6-1): False (0) -> True (-1), True (<> 0) -> False
         if t is not None and t.is_bool:
             return f"(not {code})", t
-        if t is not None and t.is_integral:
-            return f"(~{code})", t
+        if t is not None and t.is_number:
+            return f"(-1 if {code} == 0 else 0)", SType("integer")
         return f"_not({code})", None
 
     def e_Binary(self, e: ast.Binary):
@@ -493,18 +514,20 @@ class ExpressionCompiler(Scope):
         result = SType("integer") if ints else SType("double")
         if op == "+":
             if at is not None and bt is not None and at.is_string and bt.is_string:
-                return f"({a} + {b})", SType("string")
-            return (f"({a} + {b})", result) if nums else (f"_add({a}, {b})", None)
+                return self.unchecked(f"_cat({a}, {b})"), SType("string")
+            return self.unchecked(f"({a} + {b})") if nums else self.unchecked(f"_add({a}, {b})"), \
+                result if nums else None
         if op in ("-", "*"):
-            return (f"({a} {op} {b})", result) if nums else (f"(_num({a}) {op} _num({b}))", SType("double"))
+            return self.unchecked(f"({a} {op} {b})" if nums else f"(_num({a}) {op} _num({b}))"), \
+                result if nums else SType("double")
         if op in _OPERATOR_HELPERS:
             helper, rtype = _OPERATOR_HELPERS[op]
-            return f"{helper}({a}, {b})", SType(rtype)
+            return self.unchecked(f"{helper}({a}, {b})"), SType(rtype)
         if op == "mod":
             return f"_mod({a}, {b})", result
         if op == "&":
             if at is not None and bt is not None and at.is_string and bt.is_string:
-                return f"({a} + {b})", SType("string")
+                return f"_cat({a}, {b})", SType("string")
             return f"_concat({a}, {b})", SType("string")
         if op in ("=", "<>", "<", ">", "<=", ">="):
             strings = at is not None and bt is not None and at.is_string and bt.is_string

@@ -21,7 +21,7 @@ from .scope import mangle
 from .symbols import SType, VarSym
 from .values import CONVERT, DEFAULTS
 
-FINALLY = "finally"
+TRY_BODY, FINALLY = "try", "finally"  # _Block.boundary of a Try's statements and of its Finally
 SLICE_ITERATIONS = 1024  # loop iterations between time slices, as for V+ tasks
 
 
@@ -42,7 +42,7 @@ class _Block:
 
     ident: int
     labels: dict[str, int]  # label -> segment
-    boundary: object = False  # True: a Try or Catch body; FINALLY: a Finally body, no GoTo out
+    boundary: object = False  # TRY_BODY (GoTo out allowed); True (a Catch) or FINALLY: no GoTo out
 
 
 @dataclass
@@ -292,13 +292,41 @@ class ProcCompiler(ExpressionCompiler):
 
     def s_Assign(self, s: ast.Assign, depth: int) -> None:
         value = s.value
+        target = s.target
         if s.op != "=":
             op = {"^=": "^", "*=": "*", "/=": "/", "\\=": "\\", "+=": "+", "-=": "-", "<<=": "<<",
                   ">>=": ">>", "&=": "&"}[s.op]
-            value = ast.Binary(op, s.target, s.value)
+            target = self.evaluated_once(target, depth)
+            value = ast.Binary(op, target, s.value)
             value.line, value.column = s.line, s.column
         code, vt = self.expr(value)
-        self.store(s.target, code, vt, depth)
+        self.store(target, code, vt, depth)
+
+    def evaluated_once(self, target: ast.Expr, depth: int) -> ast.Expr:
+        """The target of a compound assignment with its indices and object computed once
+        (`a(f()) += 1` calls f once, as VB.NET does)."""
+        if isinstance(target, ast.Call):
+            func = self.evaluated_once(target.func, depth) if isinstance(target.func, ast.Member) else target.func
+            args = [self.temporary(a, depth) for a in target.args]
+            return ast.Call(func, args, target.line, target.column)
+        if isinstance(target, ast.Member) and not isinstance(target.obj, (ast.Name, ast.Me)):
+            code, t = self.expr_or_ns(target.obj, target.key)
+            if t is not None and t.base == "ns":
+                return target
+            return ast.Member(ast.Evaluated(code=self.hold(code, depth), type=t),
+                              target.name, target.line, target.column)
+        return target
+
+    def temporary(self, e: ast.Expr, depth: int) -> ast.Expr:
+        if isinstance(e, (ast.Literal, ast.Name, ast.Evaluated)):
+            return e
+        code, t = self.expr(e)
+        return ast.Evaluated(code=self.hold(code, depth), type=t)
+
+    def hold(self, code: str, depth: int) -> str:
+        temp = self.fresh("once")
+        self.emit(depth, f"{temp} = {code}")
+        return temp
 
     def s_CallStatement(self, s: ast.CallStatement, depth: int) -> None:
         e = s.expr
@@ -512,7 +540,7 @@ class ProcCompiler(ExpressionCompiler):
         self.try_depth += 1
         if s.catch_body is not None:
             self.emit(inner, "try:")
-            self.block(s.body, inner + 1, dispatch_var=pc, boundary=True)
+            self.block(s.body, inner + 1, dispatch_var=pc, boundary=TRY_BODY)
             self.node = s
             self.emit(inner, "except Exception as _e:  # not the _Control jumps (BaseException)")
             if catch_var is not None:
@@ -536,7 +564,7 @@ class ProcCompiler(ExpressionCompiler):
                 self.block(s.catch_body, inner + 1)
                 self.blocks.pop()
         else:
-            self.block(s.body, inner, boundary=True)
+            self.block(s.body, inner, boundary=TRY_BODY)
             if retry:
                 self.emit(inner, "break")
         self.try_depth -= 1
@@ -569,8 +597,8 @@ class ProcCompiler(ExpressionCompiler):
             if s.label in block.labels:
                 self.emit(depth, f"raise _Jump({block.ident}, {block.labels[s.label]})")
                 return
-            if block.boundary is FINALLY:
-                break  # out of a Try or a Catch is allowed (its Finally runs), out of a Finally not
+            if block.boundary and block.boundary is not TRY_BODY:
+                break  # out of the try_statements is allowed (the Finally runs), not out of a Catch or Finally
         if self.label_exists(s.label):
             raise self.fail(ILLEGAL_GOTO, f"GoTo {s.label}", s)
         raise self.fail(UNDEFINED_SYMBOL, f"label {s.label}", s)

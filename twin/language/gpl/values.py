@@ -21,6 +21,8 @@ from .errors import DIVIDE_BY_ZERO, INVALID_NUMBER, OUT_OF_MEMORY, OVERFLOW, SUB
 # elements, a String at most this many characters; beyond, -711 *Out of memory*.
 MAX_ARRAY_ELEMENTS = 1 << 22
 MAX_STRING_LENGTH = 1 << 24
+DOUBLE_MAX = 1.7976931348623157e308
+SINGLE_MAX = 3.4028234663852886e38
 INTEGER_RANGES = {"integer": (-(2**31), 2**31 - 1), "short": (-32768, 32767), "byte": (0, 255)}
 
 
@@ -166,15 +168,29 @@ def _cbyte(v) -> int:
 
 
 def _cdbl(v) -> float:
-    if v.__class__ is float:
+    if v.__class__ is float and -DOUBLE_MAX <= v <= DOUBLE_MAX:
         return v
-    return float(_num(v))
+    v = float(_num(v))
+    if not -DOUBLE_MAX <= v <= DOUBLE_MAX:
+        raise fail(OVERFLOW, f"{v} as Double")
+    return v
+
+
+def _overflow(v, kind: str):
+    """A stored operator result out of its type's range (expressions.py _RANGE_CHECKS)."""
+    raise fail(OVERFLOW, f"{format_number(v)} as {kind}")
+
+
+def format_number(v) -> str:
+    return str(v) if v.__class__ is int else {math.inf: "+infinity", -math.inf: "-infinity"}.get(v, repr(v))
 
 
 def _csng(v) -> Single:
     if v.__class__ is Single:
         return v
     v = _cdbl(v)
+    if abs(v) > SINGLE_MAX:
+        raise fail(OVERFLOW, f"{v} as Single")
     try:
         return Single(struct.unpack("f", struct.pack("f", v))[0])
     except OverflowError:
@@ -208,6 +224,8 @@ def format_value(v) -> str:
     if t is int:
         return str(v)
     if t is float or t is Single:
+        if not -DOUBLE_MAX <= v <= DOUBLE_MAX:
+            raise fail(OVERFLOW, f"{format_number(v)} as a Double")
         digits = 7 if t is Single else 15  # a Single shows 0.1, not 0.100000001490116
         if v.is_integer() and abs(v) < 10 ** digits:
             return str(int(v))
@@ -241,12 +259,19 @@ def _ix(v) -> int:
 def _add(a, b):
     """`+`: concatenation when both are Strings, else numeric (ch. 7: 2.34 + "1.01" = 3.35)."""
     if a.__class__ is str and b.__class__ is str:
-        return a + b
+        return _cat(a, b)
     return _num(a) + _num(b)
 
 
 def _concat(a, b) -> str:
-    return _cstr(a) + _cstr(b)
+    return _cat(_cstr(a), _cstr(b))
+
+
+def _cat(a: str, b: str) -> str:
+    """Two Strings joined, within the controller's memory (-711 beyond MAX_STRING_LENGTH)."""
+    if len(a) + len(b) > MAX_STRING_LENGTH:
+        raise fail(OUT_OF_MEMORY, f"a String of {len(a) + len(b):,} characters (at most {MAX_STRING_LENGTH:,})")
+    return a + b
 
 
 def _div(a, b) -> float:
@@ -324,9 +349,11 @@ def _xor(a, b):
 
 
 def _not(a):
+    """Not: False (0) -> True (-1), any True (<> 0) -> False (0), Table 6-1 (a Boolean
+    gives a Boolean, a number the Integer -1 or 0)."""
     if a.__class__ is bool:
         return not a
-    return ~_bits(_num(a))
+    return -1 if _num(a) == 0 else 0
 
 
 def _truth(v) -> bool:
