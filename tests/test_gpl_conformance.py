@@ -438,3 +438,159 @@ Module M
 End Module
 """)
     assert out == "23 14 13\n"
+
+
+# ------------------------------------------------------------ procedures
+def test_byref_is_a_true_reference():
+    """ch. 10 (L1505-1514) ByRef passes the variable itself: the callee's write is the
+    caller's at once, so it stays when the callee then throws, and two ByRef parameters
+    bound to one variable are that one variable."""
+    out = output_of("""
+Module M
+    Sub SetThenFail(ByRef v As Integer)
+        v = 42
+        Throw New Exception(-786)
+    End Sub
+    Sub Both(ByRef a As Integer, ByRef b As Integer)
+        a = 5
+        Console.WriteLine("b sees " & b)
+        b += 1
+    End Sub
+    Public Sub Main()
+        Dim x As Integer = 1
+        Try
+            SetThenFail(x)
+        Catch
+        End Try
+        Console.WriteLine("after throw " & x)
+        Dim y As Integer = 0
+        Both(y, y)
+        Console.WriteLine("y " & y)
+    End Sub
+End Module
+""")
+    assert out == "after throw 42\nb sees 5\ny 6\n"
+
+
+def test_delegates_in_fields_and_module_variables_are_called_directly():
+    """ch. 10: a Delegate is an object like any other; one stored in a class field or a
+    module variable is called as obj.handler(x) or Module.fallback(x)."""
+    out = output_of("""
+Delegate Function Op(ByVal x As Integer) As Integer
+Delegate Sub Note(ByVal s As String)
+Class Handler
+    Public handler As Op
+    Public notify As Note
+End Class
+Module Ops
+    Public fallback As Op
+    Public Function Twice(ByVal x As Integer) As Integer
+        Return 2 * x
+    End Function
+    Public Function Neg(ByVal x As Integer) As Integer
+        Return -x
+    End Function
+    Public Sub Say(ByVal s As String)
+        Console.WriteLine("say " & s)
+    End Sub
+End Module
+Module M
+    Public Sub Main()
+        Dim h As New Handler
+        h.handler = New Op(AddressOf Ops.Twice)
+        h.notify = New Note(AddressOf Ops.Say)
+        Ops.fallback = New Op(AddressOf Ops.Neg)
+        Console.WriteLine(h.handler(21) & " " & Ops.fallback(3))
+        h.notify("hi")
+    End Sub
+End Module
+""")
+    assert out == "42 -3\nsay hi\n"
+
+
+# ------------------------------------------------------------ library signatures
+def test_library_signatures_field_code_relies_on(tmp_path):
+    """GPL Dictionary: Location.Angles(a1, ..., an) makes an Angles location with one value
+    per robot axis; Profile.Speed2 = 0 is allowed; Exception.UpdateErrorCode with no
+    argument; Robot.TrajState(robot, n); Location.Pos = a Cartesian value on an Angles
+    location makes it Cartesian."""
+    report = on_cell(tmp_path, """
+        Dim a As New Location
+        a.Angles(10, 20, 30, 40)
+        Console.WriteLine(a.Type & " " & a.Angle(2) & " " & a.Angle(4))
+        Dim p As New Profile
+        p.Speed2 = 0
+        Console.WriteLine(CStr(p.Speed2))
+        Dim ex As New Exception(-1025)
+        ex.UpdateErrorCode()
+        ex.UpdateErrorCode
+        Console.WriteLine(CStr(ex.ErrorCode))
+        Console.WriteLine(CStr(Robot.TrajState(1, 0)))
+        Dim c As New Location
+        c.XYZ(300, 10, 200, 0, 180, 0)
+        a.Pos = c
+        Console.WriteLine(a.Type & " " & a.X & " " & a.Y)
+""")
+    assert report.errors == []
+    assert report.output.splitlines() == ["1 20 40", "0", "-1025", "0", "0 300 10"]
+
+
+def test_pallet_order_uses_the_dictionarys_encoding():
+    """GPL Dictionary, RefFrame.PalletOrder: 0 row-column-layer (a new pallet's), 1 row-layer-
+    column, 2 column-row-layer, 3 column-layer-row, 4 layer-row-column, 5 layer-column-row."""
+    out = output_of("""
+Module M
+    Public Sub Main()
+        Dim frame As New RefFrame
+        Dim spot As New Location
+        Dim order As Integer
+        frame.Type = 1
+        frame.Loc.XYZ(0, 0, 0, 0, 0, 0)
+        frame.PalletMaxIndex(1) = 2
+        frame.PalletMaxIndex(2) = 2
+        frame.PalletMaxIndex(3) = 2
+        frame.PalletPitch(1) = 1
+        frame.PalletPitch(2) = 10
+        frame.PalletPitch(3) = 100
+        spot.RefFrame = frame
+        Console.WriteLine(CStr(frame.PalletOrder))
+        For order = 0 To 5
+            frame.PalletOrder = order
+            frame.PalletRowColLay(1, 1, 1)
+            frame.PalletNextPos
+            Console.WriteLine(order & ": " & (spot.Pos.X + spot.Pos.Y + spot.Pos.Z))
+        Next
+    End Sub
+End Module
+""")
+    assert out.splitlines() == ["0", "0: 1", "1: 1", "2: 10", "3: 10", "4: 100", "5: 100"]
+
+
+def test_addressof_an_undefined_procedure_is_undefined_procedure():
+    """AddressOf (or a Delegate's New) of a procedure that does not exist is -710
+    *Undefined procedure*, the code a command server's dispatcher expects; a name given
+    as a String is found when the New runs, and the same code can be caught."""
+    for target in ("Missing", "M.Missing"):
+        with pytest.raises(ProgramError) as caught:
+            output_of(f"""
+Delegate Sub Cmd()
+Module M
+    Public Sub Main()
+        Dim d As New Cmd(AddressOf {target})
+    End Sub
+End Module
+""")
+        assert caught.value.code == -710 and caught.value.line == 5
+    out = output_of("""
+Delegate Sub Cmd()
+Module M
+    Public Sub Main()
+        Try
+            Dim d As New Cmd("NoSuchCommand")
+        Catch ex As Exception
+            Console.WriteLine(CStr(ex.ErrorCode))
+        End Try
+    End Sub
+End Module
+""")
+    assert out == "-710\n"

@@ -18,8 +18,8 @@ from ...errors import ProgramError
 from . import ast
 from .builtins import FUNCTION_TYPES, FUNCTIONS, STRING_MEMBERS, STRING_SHARED
 from .errors import (
-    SYNTAX_ERROR, CONSTANT_ASSIGNMENT, INVALID_STATEMENT, PRIVATE_SYMBOL, TYPE_MISMATCH, UNDEFINED_SYMBOL, UNSUPPORTED,
-    WRONG_ARGUMENT_COUNT,
+    SYNTAX_ERROR, CONSTANT_ASSIGNMENT, INVALID_STATEMENT, PRIVATE_SYMBOL, TYPE_MISMATCH, UNDEFINED_PROCEDURE,
+    UNDEFINED_SYMBOL, UNSUPPORTED, WRONG_ARGUMENT_COUNT,
 )
 from .library import CLASSES, member as library_member
 from .parser import keywords
@@ -435,6 +435,8 @@ class ExpressionCompiler(Scope):
         if isinstance(target, ast.Member):
             ocode, ot = self.expr_or_ns(target.obj)
             if ot is not None and ot.base == "ns":
+                if isinstance(ot.ref, (ModuleSym, ClassSym)) and ot.ref.member(target.key) is None:
+                    raise self.fail(UNDEFINED_PROCEDURE, f"{ot.ref.name}.{target.name}", target)
                 proc = self.member_of_namespace(ot.ref, target.key, target)
             elif ot is not None and ot.base == "user":
                 proc = self.class_member(ot.ref, target.key, target)
@@ -443,6 +445,8 @@ class ExpressionCompiler(Scope):
                 raise self.fail(TYPE_MISMATCH, "AddressOf needs a procedure", e)
         elif isinstance(target, ast.Name):
             proc = self.lookup_value(target.key, target)
+            if proc is None:  # what a real controller reports for a procedure it does not have
+                raise self.fail(UNDEFINED_PROCEDURE, target.name, target)
             if isinstance(proc, ProcSym) and proc.instance and self.me_available:
                 me = "me"
         else:
@@ -636,6 +640,9 @@ class ExpressionCompiler(Scope):
                     return f"_GlobalRef(globals(), {sym.py!r})"
                 if sym.kind == "field":
                     return f"_AttrRef({self.me_code()}, {sym.py!r})"
+                for passed, cell, _ in write_back:
+                    if isinstance(passed, ast.Name) and passed.key == arg.key:
+                        return cell  # f(x, x): both parameters are the one variable
                 cell = self.fresh("ref")
                 self.emit(self.depth, f"{cell} = _Ref({sym.py})")
                 write_back.append((arg, cell, t))
@@ -663,9 +670,11 @@ class ExpressionCompiler(Scope):
         if not write_back:
             return call
         temp = self.fresh("r")
-        self.emit(self.depth, f"{temp} = {call}")
+        self.emit(self.depth, "try:")
+        self.emit(self.depth + 1, f"{temp} = {call}")
+        self.emit(self.depth, "finally:  # the callee's writes are the caller's even when it throws")
         for arg, cell, t in write_back:
-            self.store(arg, f"{cell}.value", t, self.depth)
+            self.store(arg, f"{cell}.value", t, self.depth + 1)
         return temp
 
     def call_member(self, ocode: str, ot: SType | None, func: ast.Member, args, e, statement: bool,
@@ -687,6 +696,8 @@ class ExpressionCompiler(Scope):
             if isinstance(sym, VarSym):
                 t = sym.type
                 self.references.add(sym.py)
+                if t.base == "delegate" and not t.rank and (args or statement):
+                    return self.invoke_delegate(sym.py, t.ref, args, e)  # Module.fallback(x)
                 if args:
                     return f"{sym.py}[{self.indices(args)}]", t.element
                 return sym.py, t
@@ -707,6 +718,8 @@ class ExpressionCompiler(Scope):
                 where = sym.py if sym.kind == "shared" else f"{ocode}.{sym.py}"
                 if sym.kind == "shared":
                     self.references.add(sym.py)
+                if sym.type.base == "delegate" and not sym.type.rank and (args or statement):
+                    return self.invoke_delegate(where, sym.type.ref, args, e)  # obj.handler(x)
                 if args:
                     if sym.type.is_array:
                         return f"{where}[{self.indices(args)}]", sym.type.element
