@@ -29,7 +29,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from . import ast
-from .errors import DUPLICATE_SYMBOL, INVALID_STATEMENT
+from .errors import DUPLICATE_SYMBOL, INVALID_STATEMENT, TOO_DEEP
 from .expressions import library_byref, library_names, library_waits
 from .scope import Scope, _error, mangle
 from .statements import CompiledUnit, ProcCompiler
@@ -271,7 +271,11 @@ class ProjectCompiler:
 
     def compile_procedure(self, proc: ProcSym) -> None:
         gen = ProcCompiler(self, proc.module, proc, proc.cls, proc.py, proc.qualified)
-        gen.compile_procedure()
+        try:
+            gen.compile_procedure()
+        except RecursionError:  # the compiler walks statements and expressions recursively
+            raise _error(TOO_DEEP, f"more than the compiler can nest in {proc.qualified}", proc.module.file,
+                         gen.node or proc.node, proc.qualified) from None
 
     def compile_property(self, prop: PropSym) -> None:
         node = prop.node

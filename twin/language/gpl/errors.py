@@ -32,6 +32,7 @@ UNSUPPORTED = -2010
 ILLEGAL_GOTO = -2011
 NO_START_PROCEDURE = -2012
 PROJECT_FILE_ERROR = -2013
+TOO_DEEP = -2014
 
 DIVIDE_BY_ZERO = -702
 OVERFLOW = -703
@@ -61,6 +62,7 @@ MESSAGES = {
     ILLEGAL_GOTO: "Illegal GoTo into or out of a block",
     NO_START_PROCEDURE: "Start procedure not found or not Public",
     PROJECT_FILE_ERROR: "Invalid project file",
+    TOO_DEEP: "Statement too complex or nested too deeply",
     DIVIDE_BY_ZERO: "Divide by zero",
     OVERFLOW: "Numeric overflow",
     SUBSCRIPT_RANGE: "Array index out of range",

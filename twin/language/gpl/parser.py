@@ -8,11 +8,14 @@ ProgramError with file, line, column, the offending text and GPL's code.
 
 from __future__ import annotations
 
+import os
 import re
+import stat
 from functools import lru_cache
 from pathlib import Path
 
-from lark import Lark, Token, Transformer, v_args
+from lark import Lark, Token, v_args
+from lark.visitors import Transformer_NonRecursive
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from ...errors import ProgramError
@@ -74,7 +77,7 @@ def _body(tree_or_list) -> list[ast.Statement]:
 
 
 @v_args(meta=True)
-class _ToAst(Transformer):
+class _ToAst(Transformer_NonRecursive):  # no recursion: a program nested 10,000 deep still parses
     # ---- literals and names
     def number(self, meta, c):
         text = str(c[0])
@@ -480,6 +483,8 @@ def parse(text: str, file: str = "<string>") -> ast.SourceFile:
 def parse_file(path: str | Path) -> ast.SourceFile:
     path = Path(path)
     try:
+        if not stat.S_ISREG(os.stat(path).st_mode):  # a FIFO or a device would hang or never end
+            raise ProgramError(f"Cannot open file {path}: not a regular file", file=str(path))
         text = path.read_text(encoding="latin-1")
     except OSError:
         raise ProgramError(f"Cannot open file {path}", file=str(path)) from None

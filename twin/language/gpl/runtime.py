@@ -25,7 +25,7 @@ from .compiler import CompiledProject, ProjectCompiler
 from .expressions import library_arity, library_byref
 from .errors import (
     DIVIDE_BY_ZERO, INVALID_ARGUMENT, INVALID_NUMBER, INVALID_STATEMENT, ME_UNDEFINED, NO_START_PROCEDURE,
-    NULL_OBJECT, OUT_OF_MEMORY, OVERFLOW, STACK_OVERFLOW, TYPE_MISMATCH, UNDEFINED_PROCEDURE, UNDEFINED_SYMBOL, WRONG_ARGUMENT_COUNT,
+    NULL_OBJECT, OUT_OF_MEMORY, OVERFLOW, TOO_DEEP, STACK_OVERFLOW, TYPE_MISMATCH, UNDEFINED_PROCEDURE, UNDEFINED_SYMBOL, WRONG_ARGUMENT_COUNT,
     GplError, fail, message,
 )
 from . import library as library_package
@@ -466,10 +466,26 @@ class GplSystem:
             for var in module.vars.values():
                 ns[var.py] = None
         for index, unit in enumerate(compiled.units):
-            code = compile(unit.source, f"<gpl:{index}>", "exec")
-            exec(code, ns)
+            exec(self._python_code(unit, index), ns)
         for cls in compiled.classes:
             ns[cls.py].gpl_members = self._class_members(cls)
+
+    def _python_code(self, unit, index: int):
+        """The unit's generated Python, compiled.  Python's own limits (20 nested loops or
+        Try blocks, 100 indentation levels, 200 nested parentheses) are GPL -2014 errors
+        at the statement that goes beyond them."""
+        try:
+            return compile(unit.source, f"<gpl:{index}>", "exec")
+        except (SyntaxError, RecursionError, MemoryError) as err:
+            generated = getattr(err, "lineno", None) or 0
+            lines = [n for n in unit.line_map if n <= generated] or sorted(unit.line_map)[:1]
+            located = ProgramError(f"{message(TOO_DEEP)}: more than the controller can nest in {unit.name}",
+                                   TOO_DEEP, file=unit.file, program=unit.name)
+            if lines:
+                line, column = unit.line_map[max(lines)]
+                text = self.sources.get(unit.file, [])
+                located.located(line=line, column=column, text=text[line - 1] if 0 < line <= len(text) else None)
+            raise located from None
 
     def _class_members(self, cls) -> dict:
         """What run-time member lookup (_callm/_setm) needs about a user class."""
