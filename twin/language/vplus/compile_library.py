@@ -20,7 +20,7 @@ import dataclasses
 
 from . import ast
 from . import messages as msg
-from .keywords import INSTRUCTIONS, NAME_ARGUMENTS, WRITES_FIRST_ARGUMENT, arity
+from .keywords import INSTRUCTIONS, NAME_ARGUMENTS, WRITES_FIRST_ARGUMENT, argument_check, arity
 
 FORMAT_ARGUMENTS = {"$ENCODE"}  # arguments are TYPE items: expressions and /I0, /F8.3 ...
 ARRAY_ARGUMENTS = {"$UNPACK", "SOLVE.FLAGS"}  # the first argument a[i] (a[]) is passed as (array, index)
@@ -89,7 +89,7 @@ class LibraryStatements:
                     raise self.error(s, msg.INVALID_ARGUMENT, f"{s.name} needs an array")
                 passed.append(self.array_ref(v))
             else:
-                passed.append(self.expr(v))
+                passed.append(self.checked(v, argument_check(spec.function, i), s.name))
         writes = []  # (position, variable) of the plain variables the instruction sets
         for i, a in enumerate(s.args):
             if a is None:
@@ -102,7 +102,7 @@ class LibraryStatements:
                 passed.append(self.peek(a))
                 writes.append((i, a))
             else:
-                passed.append(self.expr(a))
+                passed.append(self.checked(a, argument_check(spec.function, len(passed)), s.name))
         call = f"I[{s.name!r}](rt{''.join(', ' + a for a in passed)})"
         if not writes:
             self.emit(depth, call)

@@ -41,7 +41,7 @@ from ...errors import ProgramError
 from . import ast
 from . import messages as msg
 from .compile_library import LIBRARY_CALLS, LibraryStatements
-from .keywords import FUNCTIONS, INSTRUCTIONS, STRING_FUNCTIONS, arity, called_bare
+from .keywords import FUNCTIONS, INSTRUCTIONS, STRING_FUNCTIONS, argument_check, arity, called_bare
 from .values import single
 from .parser import normalize_name
 
@@ -69,6 +69,9 @@ _UNTRAPPED = (ast.If, ast.For, ast.While, ast.DoUntil, ast.Case, ast.Declare, as
 _FLOW = {"RETURN", "RETURNE", "EXIT", "NEXT", "STOP", "HALT"}
 # Instructions the compiler carries out itself (besides the keyword table).
 _INSTRUCTION_NAMES = {*_FLOW, *_TASK_INSTRUCTIONS, "WAIT", "REACT", "REACTI", "REACTE"}
+
+# What each argument check expects, for the load-time message.
+_EXPECTED = {"_real": "a real value", "_location": "a location", "_point": "a location", "_str": "a string"}
 
 _RELATIONAL = {"==": "==", "<>": "!=", "<": "<", "<=": "<=", ">": ">", ">=": ">="}
 _ARITH = {"+": "+", "-": "-", "*": "*", "/": "/"}
@@ -340,8 +343,7 @@ class ProgramCompiler(LibraryStatements):
         if isinstance(e, ast.Call):
             return self.call(e)
         if isinstance(e, ast.ByCall):
-            args = ", ".join(self.expr(a) for a in [e.subject, *e.args])
-            return f"F[{e.name!r}](rt, {args})"
+            return f"F[{e.name!r}](rt, {self.checked_arguments(e.name, FUNCTIONS[e.name], [e.subject, *e.args])})"
         if isinstance(e, ast.Compound):
             return f"_compound({self.expr(e.left)}, {self.expr(e.right)})"
         if isinstance(e, ast.Unary):
@@ -408,8 +410,27 @@ class ProgramCompiler(LibraryStatements):
             raise self.error(self.current, msg.UNDEFINED_PROGRAM, e.name)
         fewest, most = arity(table[e.name])
         self.argument_count(e.name, e.args, fewest, most)
-        args = ", ".join("None" if a is None else self.expr(a) for a in e.args)
+        args = self.checked_arguments(e.name, table[e.name], e.args)
         return f"F[{e.name!r}](rt{', ' if args else ''}{args})"
+
+    def checked(self, arg: ast.Expr | None, check: str | None, name: str) -> str:
+        """An argument with the check its parameter's kind asks for (keywords/__init__.py):
+        a string constant or $ expression where another kind belongs, or a number where a
+        string belongs, is a load-time *Wrong data type*; a real constant needs no check."""
+        if arg is None:
+            return "None"
+        if check is None:
+            return self.expr(arg)
+        text = is_string(arg)
+        if (check == "_str") != text and (text or isinstance(arg, ast.Num)):
+            raise self.error(self.current, msg.WRONG_TYPE,
+                             f"{name}: {'a string' if text else 'a number'} where {_EXPECTED[check]} belongs")
+        if (check == "_real" and isinstance(arg, ast.Num)) or (check == "_str" and isinstance(arg, ast.Str)):
+            return self.expr(arg)
+        return f"{check}({self.expr(arg)})"
+
+    def checked_arguments(self, name: str, function, args: list) -> str:
+        return ", ".join(self.checked(a, argument_check(function, i), name) for i, a in enumerate(args))
 
     def defined(self, e: ast.Call) -> str:
         if len(e.args) != 1 or not isinstance(e.args[0], ast.Var):
@@ -876,7 +897,7 @@ class ProgramCompiler(LibraryStatements):
             args = ", ".join([*(repr(a.name.upper()) for a in s.args if isinstance(a, ast.Var)),
                               *(["'ALWAYS'"] if s.always else [])])
         else:  # DURATION 0.5 ALWAYS
-            args = ", ".join(["None" if a is None else self.expr(a) for a in s.args]
+            args = ", ".join(([self.checked_arguments(name, spec.function, s.args)] if s.args else [])
                              + (["always=True"] if s.always else []))
         call = f"I[{name!r}](rt{', ' if args else ''}{args})"
         self.emit(depth, f"yield from {call}" if spec.waits else call)

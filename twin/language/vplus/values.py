@@ -89,9 +89,13 @@ def _str(value) -> str:
 
 
 def _real(value) -> float:
-    if isinstance(value, (str, Location)) or value is None:
-        raise fail(msg.WRONG_TYPE, "real value expected")
-    return float(value)
+    """A real argument or value: a string, location, precision point or array is
+    *Wrong data type*."""
+    if isinstance(value, float):
+        return value
+    if isinstance(value, int):
+        return float(value)
+    raise fail(msg.WRONG_TYPE, "real value expected")
 
 
 def single(value: float) -> float:
@@ -124,6 +128,13 @@ def _argument(value, kind: str, name: str):
 
 def _location(value) -> Location:
     if not isinstance(value, Location):
+        raise fail(msg.WRONG_TYPE, "location expected")
+    return value
+
+
+def _point(value):
+    """Where a motion may go: a transformation or a precision point."""
+    if not isinstance(value, (Location, tuple)):
         raise fail(msg.WRONG_TYPE, "location expected")
     return value
 

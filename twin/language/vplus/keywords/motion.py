@@ -12,7 +12,7 @@ from __future__ import annotations
 from ....controller.location import Location, approach
 from .. import messages as msg
 from ..values import fail
-from . import function, instruction
+from . import Loc, Point, function, instruction
 from .locations import location_arg
 
 
@@ -42,22 +42,22 @@ def _always(names: tuple) -> bool:
 
 
 @instruction("MOVE", waits=True)
-def _move(rt, loc):
+def _move(rt, loc: Point):
     yield from rt.robot.move(_destination(loc), straight=False, cp=_cp(rt))
 
 
 @instruction("MOVES", waits=True)
-def _moves(rt, loc):
+def _moves(rt, loc: Point):
     yield from rt.robot.move(_as_location(rt, loc), straight=True, cp=_cp(rt))
 
 
 @instruction("APPRO", waits=True)
-def _appro(rt, loc, distance=None):
+def _appro(rt, loc: Point, distance=None):
     yield from rt.robot.move(approach(_as_location(rt, loc), distance or 0.0), straight=False, cp=_cp(rt))
 
 
 @instruction("APPROS", waits=True)
-def _appros(rt, loc, distance=None):
+def _appros(rt, loc: Point, distance=None):
     yield from rt.robot.move(approach(_as_location(rt, loc), distance or 0.0), straight=True, cp=_cp(rt))
 
 
@@ -72,7 +72,7 @@ def _departs(rt, distance):
 
 
 @instruction("MOVET", waits=True)
-def _movet(rt, loc, hand):
+def _movet(rt, loc: Point, hand):
     """MOVET loc, hand: MOVE with the hand operated as the motion starts; a pneumatic hand
     opens for an opening above 0 and closes otherwise (docs/motion.md)."""
     rt.robot.hand_at_next_motion(_hand_for_opening(hand))
@@ -80,7 +80,7 @@ def _movet(rt, loc, hand):
 
 
 @instruction("MOVEST", waits=True)
-def _movest(rt, loc, hand):
+def _movest(rt, loc: Point, hand):
     rt.robot.hand_at_next_motion(_hand_for_opening(hand))
     yield from _moves(rt, loc)
 
@@ -96,7 +96,7 @@ def _ready(rt):
 
 
 @function("INRANGE")
-def _inrange(rt, loc):
+def _inrange(rt, loc: Point):
     """INRANGE(loc): 0 if the robot can reach loc, otherwise bits saying why not."""
     return float(rt.robot.inrange(_destination(loc)))
 
@@ -204,7 +204,7 @@ for _name in ("ABOVE", "BELOW", "FLIP", "NOFLIP"):
 
 # ---------------------------------------------------------------- TOOL and BASE
 @instruction("TOOL", waits=True)
-def _tool(rt, loc):
+def _tool(rt, loc: Loc):
     yield from rt.robot.set_tool(location_arg(loc))
 
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 from ....controller.kinematics import KinematicsError
 from .. import messages as msg
 from ..values import fail
-from . import function, instruction
+from . import Any, Loc, function, instruction
 from .locations import location_arg
 
 HAND_VALUES = {"open": 1.0, "close": 0.0, "relax": -1.0}
@@ -34,7 +34,7 @@ def _joints_from(rt, ref) -> list[float]:
 
 
 @instruction("SOLVE.ANGLES", targets=True, array_values=(1,), writes_back=True)
-def _solve_angles(rt, trans, seed, in_flags, out_joints, out_flags, error):
+def _solve_angles(rt, trans: Loc, seed: Any, in_flags, out_joints: Any, out_flags: Any, error: Any):
     """o.jts[] gets the joints that put the tool tip at `trans` nearest i.jts[], in the
     configuration i.flags asks for (CONFIG bits), o.flags their bits and error 0; a
     location the robot cannot reach leaves o.jts[] and o.flags as they were and sets
@@ -54,14 +54,14 @@ def _solve_angles(rt, trans, seed, in_flags, out_joints, out_flags, error):
 
 
 @instruction("SOLVE.TRANS", targets=True, array_values=(0,), writes_back=True)
-def _solve_trans(rt, joints, trans, error=None):
+def _solve_trans(rt, joints: Any, trans: Any, error: Any = None):
     """trans gets the tool-tip location (TOOL and BASE applied) of the joints in i.jts[];
     error, if given, 0 (forward kinematics always has an answer)."""
     return rt.robot.location_of_joints(_joints_from(rt, joints)), 0.0
 
 
 @function("SOLVE.FLAGS")
-def _solve_flags(rt, joints):
+def _solve_flags(rt, joints: Any):
     """SOLVE.FLAGS(jts[]): the CONFIG bits (1 RIGHTY) of the joints in the array."""
     return float(rt.robot.configuration_of(_joints_from(rt, joints)))
 
