@@ -104,6 +104,7 @@ class Declare(Statement):
     scope: str  # AUTO, LOCAL, GLOBAL
     double: bool
     names: list[tuple[Var, list[Expr] | None]]  # (variable, declared dimensions)
+    kind: str | None = None  # REAL, DOUBLE, LOC, or None when no type is written
 
 
 @dataclass

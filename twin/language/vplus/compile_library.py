@@ -25,6 +25,9 @@ from .keywords import INSTRUCTIONS, NAME_ARGUMENTS, WRITES_FIRST_ARGUMENT, argum
 FORMAT_ARGUMENTS = {"$ENCODE"}  # arguments are TYPE items: expressions and /I0, /F8.3 ...
 ARRAY_ARGUMENTS = {"$UNPACK", "SOLVE.FLAGS"}  # the first argument a[i] (a[]) is passed as (array, index)
 FORMAT_CODES = set("SCXBUNDFEGHOI")  # formats.py renders each of them
+# Field widths and repeat counts (/I10, /C2, /X40) at most this: wider than any terminal
+# line or record (the guides set no number; a larger one is a load-time *Syntax error*).
+MAX_FORMAT_WIDTH = 255
 LIBRARY_CALLS = WRITES_FIRST_ARGUMENT | NAME_ARGUMENTS | FORMAT_ARGUMENTS | ARRAY_ARGUMENTS
 
 
@@ -72,6 +75,8 @@ class LibraryStatements:
         if isinstance(item, ast.Format):
             if item.code not in FORMAT_CODES:
                 raise self.error(self.current, msg.SYNTAX_ERROR, f"unknown format /{item.code}")
+            if max(item.width or 0, item.decimals or 0) > MAX_FORMAT_WIDTH:
+                raise self.error(self.current, msg.SYNTAX_ERROR, f"format width above {MAX_FORMAT_WIDTH}")
             return f"_fmt({item.code!r}, {item.width!r}, {item.decimals!r})"
         return self.expr(item)
 

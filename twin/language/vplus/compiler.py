@@ -164,6 +164,7 @@ class _Scope:
     auto: set[str] = field(default_factory=set)  # names kept as Python locals
     local: set[str] = field(default_factory=set)  # names kept in L
     doubles: set[str] = field(default_factory=set)
+    types: dict[str, str] = field(default_factory=dict)  # declared REAL (REAL, DOUBLE) or LOC
 
 
 class ProgramCompiler(LibraryStatements):
@@ -253,6 +254,22 @@ class ProgramCompiler(LibraryStatements):
                         self.scope.local.add(key)
                     if statement.double:
                         self.scope.doubles.add(key)
+                    if statement.kind is not None:
+                        self.declare_type(var, key, statement)
+
+    def declare_type(self, var: ast.Var, key: str, statement: ast.Declare) -> None:
+        """AUTO REAL x, AUTO LOC spot: a string cannot be typed, a precision point (#) is a
+        LOC; the type then holds for the variable in this program."""
+        prefix = var.name[0]
+        if prefix == "$" or (prefix == "#" and statement.kind != "LOC"):
+            raise self.error(statement, msg.WRONG_TYPE, f"{var.name} cannot be {statement.kind}")
+        self.scope.types[key] = "LOC" if statement.kind == "LOC" else "REAL"
+
+    def check_kind(self, target: ast.Var, kind: str) -> None:
+        """Assigning a real (=) to a LOC variable, or a location (SET) to a REAL or DOUBLE one."""
+        declared = self.scope.types.get(self.key(target))
+        if declared is not None and declared != kind:
+            raise self.error(self.current, msg.WRONG_TYPE, f"{target.name} is declared {declared}")
 
     def emit_return(self, depth: int) -> None:
         if not self.program.params:
@@ -470,6 +487,7 @@ class ProgramCompiler(LibraryStatements):
         self.emit(depth + 1, "yield from rt.trap(_error)")
 
     def s_Assign(self, s: ast.Assign, depth: int) -> None:
+        self.check_kind(s.target, "REAL")
         if s.target.name.startswith("$") != is_string(s.value) and not isinstance(s.value, ast.Call):
             raise self.error(s, msg.WRONG_TYPE)
         value = self.expr(s.value)
@@ -485,9 +503,10 @@ class ProgramCompiler(LibraryStatements):
         """The Python expression that stores `value` into a real variable:
         DOUBLE variables keep 64 bits, the others are single precision."""
         key = self.key(target)
-        return f"_real({value})" if key in self.scope.doubles else f"_single({value})"
+        return f"_double({value})" if key in self.scope.doubles else f"_single({value})"
 
     def s_SetLocation(self, s: ast.SetLocation, depth: int) -> None:
+        self.check_kind(s.target, "LOC")
         check = "_precision_point" if s.target.name.startswith("#") else "_location"
         self.assign(s.target, f"{check}({self.expr(s.value)})", depth)
 
@@ -845,12 +864,12 @@ class ProgramCompiler(LibraryStatements):
             self.assign(target, self.real(target, f"{numbers}[{i}]"), depth + 1)
 
     def s_Parameter(self, s: ast.Parameter, depth: int) -> None:
-        index = self.expr(s.index) if s.index is not None else "None"
-        self.emit(depth, f"rt.set_parameter({s.name!r}, {index}, {self.expr(s.value)})")
+        index, value = self.checked(s.index, "_real", "PARAMETER"), self.checked(s.value, "_real", "PARAMETER")
+        self.emit(depth, f"rt.set_parameter({s.name!r}, {index}, {value})")
 
     def s_Speed(self, s: ast.Speed, depth: int) -> None:
-        rotation = self.expr(s.rotation) if s.rotation is not None else "None"
-        self.emit(depth, f"rt.set_speed({self.expr(s.value)}, {rotation}, {tuple(s.modifiers)!r})")
+        value, rotation = self.checked(s.value, "_real", "SPEED"), self.checked(s.rotation, "_real", "SPEED")
+        self.emit(depth, f"rt.set_speed({value}, {rotation}, {tuple(s.modifiers)!r})")
 
     def argument_count(self, name: str, args: list, fewest: int, most: int) -> None:
         if not fewest <= len(args) <= most or any(a is None for a in args[:fewest]):

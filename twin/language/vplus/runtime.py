@@ -31,7 +31,7 @@ from .keywords.strings import typed_number
 from .parser import normalize_name, parse, parse_file
 # Parameters and switches with the manuals' defaults and limits.
 from .settings import PARAMETER_DEFAULTS, SWITCH_DEFAULTS, in_range
-from .tasking import HaltProgram, StopProgram, TaskControl
+from .tasking import PROGRAM_FAULTS, HaltProgram, StopProgram, TaskControl
 
 MAJOR_CYCLE = 0.016  # s: the V+ scheduler's major cycle and trajectory period
 MAX_CALL_DEPTH = 200  # "*Too many subroutine calls*" past this many nested CALLs
@@ -265,6 +265,10 @@ class Task(TaskControl):
             problem = ProgramError(f"{msg.message(msg.UNDEFINED_VALUE)} {name}", msg.UNDEFINED_VALUE)
         elif isinstance(err, ZeroDivisionError):
             problem = ProgramError(msg.message(msg.DIVIDE_BY_ZERO), msg.DIVIDE_BY_ZERO)
+        elif isinstance(err, OverflowError):
+            problem = ProgramError(msg.message(msg.OVERFLOW), msg.OVERFLOW)
+        elif isinstance(err, ValueError):  # math domain errors, values a keyword cannot take
+            problem = ProgramError(msg.message(msg.ILLEGAL_VALUE), msg.ILLEGAL_VALUE)
         else:
             problem = ProgramError(msg.message(msg.WRONG_TYPE), msg.WRONG_TYPE)
         return self._locate(problem, err.__traceback__)
@@ -370,8 +374,8 @@ def _python_code(program) -> tuple[CompiledProgram, object]:
     compiled = compile_program(program)
     try:
         return compiled, _python_compile(compiled)
-    except SyntaxError as err:
-        if "too many statically nested blocks" not in str(err):
+    except SyntaxError as err:  # IndentationError included: "too many levels of indentation"
+        if "too many statically nested blocks" not in str(err) and "too many levels of indentation" not in str(err):
             raise
     compiled = compile_program(program, flat=True)
     return compiled, _python_compile(compiled)
@@ -419,6 +423,6 @@ _NAMESPACE = {
     "I": {name: spec.function for name, spec in INSTRUCTIONS.items()},
     "_fmt": _fmt,
     # What a step may raise that the error trap (REACTE) catches.
-    "_TRAPPED": (ProgramError, KeyError, NameError, ZeroDivisionError, TypeError, IndexError),
+    "_TRAPPED": (ProgramError, *PROGRAM_FAULTS),
     **{name: getattr(values, name) for name in dir(values) if name.startswith("_") and not name.startswith("__")},
 }

@@ -47,6 +47,12 @@ def slice_priorities(number: int) -> tuple[int, ...]:
     return _SLICE_PRIORITIES.get(number, _OTHER_TASKS)
 
 
+# Python errors a step of generated code may raise that are the program's fault (an
+# undefined variable, a division by zero, a value of the wrong kind): runtime._translate
+# turns them into the V+ error, located at the step; raised elsewhere they are twin's bugs.
+PROGRAM_FAULTS = (KeyError, NameError, ZeroDivisionError, TypeError, IndexError, ValueError, OverflowError)
+
+
 class StopProgram(Exception):
     """STOP (or RETURN from the top-level program): the current cycle ends."""
 
@@ -111,7 +117,7 @@ class TaskControl:
         except ProgramError as err:
             self.error = self._locate(err, err.__traceback__)
             self.last_error = err.code
-        except (KeyError, NameError, ZeroDivisionError, TypeError, IndexError) as err:
+        except PROGRAM_FAULTS as err:
             self.error = self._translate(err)
             self.last_error = self.error.code
         finally:

@@ -98,6 +98,14 @@ def _real(value) -> float:
     raise fail(msg.WRONG_TYPE, "real value expected")
 
 
+def _double(value) -> float:
+    """Store into a DOUBLE variable: a real within the double range."""
+    value = _real(value)
+    if not math.isfinite(value):
+        raise fail(msg.OVERFLOW, "beyond the range of a DOUBLE")
+    return value
+
+
 def single(value: float) -> float:
     """A real as a (32-bit IEEE) single-precision V+ real holds it: reals are
     single precision unless declared DOUBLE (V+ guide v17 L3868-3895)."""
@@ -107,7 +115,10 @@ def single(value: float) -> float:
 def _single(value) -> float:
     """Store into a real variable: a real, rounded to single precision."""
     try:
-        return _SINGLE.unpack(_SINGLE.pack(value))[0]
+        stored = _SINGLE.unpack(_SINGLE.pack(value))[0]
+        if stored - stored != 0.0:  # an infinity or NaN from 64-bit arithmetic inside the expression
+            raise OverflowError
+        return stored
     except OverflowError:
         raise fail(msg.OVERFLOW, f"{value:g} is beyond single precision") from None
     except struct.error:
