@@ -55,15 +55,16 @@ def _sandbox(program: Path, output: str | Path | None) -> Path:
     return Path(output).resolve().parent / f"{program.stem}-files"
 
 
-def _start_vplus(sim: Simulation, program: Path, main: str | None, console: Console | None,
+def _start_vplus(sim: Simulation, programs: list[Path], main: str | None, console: Console | None,
                  sandbox: Path) -> VPlusSystem:
+    """Load every V+ file (LOAD of several modules); the first file's first program starts."""
     system = VPlusSystem(sim.controller, sim.io, sim.clock, console=console, seed=sim.cell.seed,
                          sandbox=sandbox)
     for name, location in sim.taught_locations().items():
         system.define_location(name, location)
-    names = system.load(program)
-    if not names:
-        raise ProgramError(f"{program}: no .PROGRAM in file", file=str(program))
+    names = system.load_files(programs)
+    if not names and main is None:
+        raise ProgramError(f"{programs[0]}: no .PROGRAM in file", file=str(programs[0]))
     sim.scheduler.add(system.start(main or names[0]))
     return system
 
@@ -80,7 +81,7 @@ def _start_gpl(sim: Simulation, project: Path, main: str | None, console: Consol
 
 
 def run_program(
-    program: str | Path,
+    program: str | Path | list[str | Path],
     scene: str | Path | None = None,
     main: str | None = None,
     report_path: str | Path | None = None,
@@ -90,10 +91,14 @@ def run_program(
     console: Console | None = None,
 ) -> RunResult:
     """Load the cell, load and start the program (a V+ file or a GPL project
-    folder), simulate, report."""
-    program = Path(program)
-    if not program.exists():
-        raise ProgramError(f"*Nonexistent file* {program}", file=str(program))
+    folder, or several V+ files loaded together), simulate, report."""
+    programs = [Path(p) for p in ([program] if isinstance(program, (str, Path)) else program)]
+    program = programs[0]
+    for path in programs:
+        if not path.exists():
+            raise ProgramError(f"*Nonexistent file* {path}", file=str(path))
+    if program.is_dir() and len(programs) > 1:
+        raise ProgramError(f"{program}: a GPL project folder is run alone", file=str(program))
     scene = Path(scene) if scene is not None else DEFAULT_SCENE
     if not scene.exists():
         raise ProgramError(f"{scene}: no such scene file", file=str(scene))
@@ -104,7 +109,7 @@ def run_program(
     if program.is_dir():
         system = _start_gpl(sim, program, main, console, sandbox)
     else:
-        system = _start_vplus(sim, program, main, console, sandbox)
+        system = _start_vplus(sim, programs, main, console, sandbox)
 
     if sim.recorder is not None:
         sim.recorder.log_text(0.0, f"twin run {program} on {scene}")

@@ -93,6 +93,7 @@ class CompiledProgram:
     params: list[ast.Var]
     function: object = None  # the generator function, set by the loader
     statement_count: int = 0
+    frame_bytes: int = 20  # stack bytes of a call besides its arguments: 20 and the AUTO variables
 
 
 def is_string(expr: ast.Expr) -> bool:
@@ -233,7 +234,24 @@ class ProgramCompiler(LibraryStatements):
             self.block(p.body, 1)
             self.emit_return(1)
         return CompiledProgram(p.name, "\n".join(self.lines) + "\n", self.line_map, p.file, p.params,
-                               statement_count=self.count)
+                               statement_count=self.count, frame_bytes=20 + self.auto_bytes(p.body))
+
+    def auto_bytes(self, body: list[ast.Statement]) -> int:
+        """Stack bytes of the AUTO variables ([000] "Stack Space Required by a Subroutine"):
+        a real 4, a DOUBLE 8, a LOC 48 (a precision point 4 per joint, 6 here), a string 132,
+        an array that many times its elements (constant sizes; others count one element)."""
+        total = 0
+        for statement in body:
+            if not isinstance(statement, ast.Declare) or statement.scope != "AUTO":
+                continue
+            for var, dims in statement.names:
+                prefix = var.name[0]
+                size = (132 if prefix == "$" else 24 if prefix == "#" else 8 if statement.double
+                        else 48 if statement.kind == "LOC" else 4)
+                for d in dims or []:
+                    size *= int(d.value) + 1 if isinstance(d, ast.Num) and 0 <= d.value < 1e9 else 1
+                total += size
+        return total
 
     def collect_declarations(self, body: list[ast.Statement]) -> None:
         # Declarations come before any executable step: only comments, blank
@@ -915,9 +933,12 @@ class ProgramCompiler(LibraryStatements):
         if spec.names:  # CPON ALWAYS: ALWAYS is one of the names
             args = ", ".join([*(repr(a.name.upper()) for a in s.args if isinstance(a, ast.Var)),
                               *(["'ALWAYS'"] if s.always else [])])
-        else:  # DURATION 0.5 ALWAYS
+        else:  # DURATION 0.5 ALWAYS, ACCEL (1) 50, 50
+            if s.profile is not None and "profile" not in inspect.signature(spec.function).parameters:
+                raise self.error(s, msg.SYNTAX_ERROR, f"{name} takes no parenthesised argument")
             args = ", ".join(([self.checked_arguments(name, spec.function, s.args)] if s.args else [])
-                             + (["always=True"] if s.always else []))
+                             + (["always=True"] if s.always else [])
+                             + ([f"profile={self.checked(s.profile, '_real', name)}"] if s.profile else []))
         call = f"I[{name!r}](rt{', ' if args else ''}{args})"
         self.emit(depth, f"yield from {call}" if spec.waits else call)
 
@@ -942,6 +963,11 @@ class ProgramCompiler(LibraryStatements):
         if len(s.args) <= position or s.args[position] is None:
             if s.name == "REACTE":  # REACTE alone: no error trap any more
                 self.emit(depth, "rt.react_error(None)")
+                return
+            if s.name == "REACTI" and s.args and s.args[0] is not None:
+                # REACTI signal alone: the robot stops when the signal changes; no routine is called.
+                priority = "None" if len(s.args) < 3 or s.args[2] is None else self.expr(s.args[2])
+                self.emit(depth, f"rt.react({self.expr(s.args[0])}, None, [], {priority}, immediate=True)")
                 return
             raise self.error(s, msg.INVALID_ARGUMENT, f"{s.name} needs a program")
         target = s.args[position]

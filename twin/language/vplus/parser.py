@@ -265,6 +265,10 @@ class _ToAst(Transformer_NonRecursive):  # long expressions make deep trees
         name, args, always = children
         return ast.Instruction(str(name).upper(), args, always is not None, **_pos(meta))
 
+    def profiled_instruction(self, meta, children):
+        name, profile, args = children
+        return ast.Instruction(str(name).upper(), args, profile=profile, **_pos(meta))
+
     # ---- I/O and keyed statements (lang-library)
     def io_statement(self, meta, children):
         name, unit, *items = children

@@ -157,6 +157,24 @@ def _precision_point(value) -> tuple:
     return value
 
 
+def _turn(angle: float) -> float:
+    """An angle in (-180, 180]."""
+    angle = math.fmod(angle, 360.0)
+    return angle - 360.0 if angle > 180.0 else angle + 360.0 if angle <= -180.0 else angle + 0.0
+
+
+def components(loc: Location) -> tuple[float, ...]:
+    """x, y, z, yaw, pitch, roll as V+ shows them: every angle within +-180 and pitch signed,
+    "a positive rotation of 190 degrees is shown as -170" ([000] L6018-6019, [001] L2216).
+    Of the two equal triples (y, p, r) and (y + 180, -p, r + 180) the one with yaw in
+    (-90, 90] is shown; pitch 0 or 180 keeps yaw 0 (the SCARA form: the tool straight down
+    has pitch 180 and its turn in roll)."""
+    x, y, z, yaw, pitch, roll = loc.components()
+    if pitch not in (0.0, 180.0) and not -90.0 < yaw <= 90.0:
+        yaw, pitch, roll = _turn(yaw + 180.0), -pitch, _turn(roll + 180.0)
+    return x, y, z, yaw, pitch, roll
+
+
 def _compound(a, b) -> Location:
     return _location(a) * _location(b)
 

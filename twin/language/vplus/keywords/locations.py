@@ -8,7 +8,7 @@ import numpy as np
 
 from ....controller.location import NULL, Location, trans
 from .. import messages as msg
-from ..values import FALSE, TRUE, fail
+from ..values import FALSE, TRUE, components, fail
 from . import Any, Loc, function, instruction
 
 DEG = math.pi / 180.0
@@ -158,7 +158,7 @@ def _decompose(rt, value: Any, target: Any):
     """DECOMPOSE a[i] = loc: x, y, z, yaw, pitch, roll (or a precision point's
     joints) into a[i], a[i+1], ..."""
     if isinstance(value, Location):
-        parts = value.components()
+        parts = components(value)
     elif isinstance(value, tuple):
         parts = value
     else:

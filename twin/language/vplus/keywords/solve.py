@@ -18,6 +18,8 @@ from .locations import location_arg
 HAND_VALUES = {"open": 1.0, "close": 0.0, "relax": -1.0}
 STATE_PROGRAM_CONTROL = 7  # STATE(1): the robot is under program control
 STATE_NO_MOTION, STATE_MOVING, STATE_STOPPED = 0, 1, 2  # STATE(2)
+STATE_COMPUTER_CONTROL = 5  # STATE(3): the last of the manual control modes, computer control
+STATE_NO_CONDITION = range(4, 10)  # STATE(4..9): bit flags and modes of hardware the cell lacks
 
 
 def _joints_from(rt, ref) -> list[float]:
@@ -77,7 +79,10 @@ def _hand(rt, select=1):
 @function("STATE")
 def _state(rt, select):
     """STATE(1): 7, the robot is under program control; STATE(2): 0 before the first
-    motion, 1 while a motion runs, 2 stopped at its planned location."""
+    motion, 1 while a motion runs, 2 stopped at its planned location; STATE(3): 5, computer
+    control (no manual control mode: there is no pendant); STATE(4) to STATE(9): 0, none of
+    the front-panel, hardware or mode conditions they report exists in the twin's cell
+    (docs/vplus.md, "STATE(select)")."""
     select = int(select)
     if select == 1:
         return float(STATE_PROGRAM_CONTROL)
@@ -86,6 +91,10 @@ def _state(rt, select):
         if robot.moving:
             return float(STATE_MOVING)
         return float(STATE_STOPPED if robot.history else STATE_NO_MOTION)
+    if select == 3:
+        return float(STATE_COMPUTER_CONTROL)
+    if select in STATE_NO_CONDITION:
+        return 0.0
     raise fail(msg.ILLEGAL_VALUE, f"STATE({select})")
 
 
