@@ -63,7 +63,7 @@ def loopback(address: str) -> str:
         ip = ipaddress.ip_address(dotted)
     except ValueError:
         raise fail(msg.NETWORK_REFUSED, f"{text!r} is not an address the twin can reach "
-                   "(it talks to 127.0.0.1 and localhost only)") from None
+                   "(it talks to loopback only: 127.0.0.1, localhost)") from None
     if not ip.is_loopback:
         raise fail(msg.NETWORK_REFUSED, f"{dotted}: the twin talks to loopback addresses only "
                    "(127.0.0.1, localhost); no packet was sent")
