@@ -12,7 +12,8 @@ import struct
 import pytest
 
 from twin.language.vplus import messages as msg
-from twin.language.vplus.tcp import listening_ports, loopback
+from twin.controller.network import listening_ports
+from twin.language.vplus.tcp import loopback
 
 from vplus_helpers import run_vplus
 

@@ -201,6 +201,12 @@ class Devices:
         for key in [k for k in self.units if k[0] == task]:
             self.detach(*key)
 
+    def close_network(self) -> None:
+        """The run is over: every TCP unit stops listening and drops its clients."""
+        for unit in self.units.values():
+            if unit.tcp is not None:
+                unit.tcp.close()
+
     # ------------------------------------------------------------ disk files
     def disk_path(self, spec: str, wildcards: bool = False) -> Path:
         """`unit:path\\name.ext` -> a path inside the sandbox (case-insensitive).

@@ -38,6 +38,7 @@ import socket
 from dataclasses import dataclass, field
 from typing import Callable
 
+from ...controller.network import listening_ports
 from . import messages as msg
 from .fileio import IoError
 from .values import fail
@@ -48,8 +49,6 @@ DEFAULT_BUFFER = 512
 RECEIVE_CHUNK = 65536
 OPTION = re.compile(r"/([A-Z_]+)\s*((?:'[^']*'|\"[^\"]*\"|[^/])*)", re.IGNORECASE)
 
-# Ports the programs of this process listen on (`twin serve` prints them).
-listening_ports: set[int] = set()
 
 
 def loopback(address: str) -> str:
