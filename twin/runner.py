@@ -19,6 +19,7 @@ from .errors import ProgramError
 from .language.gpl.runtime import GplSystem
 from .language.vplus.runtime import Console, VPlusSystem
 from .report import Report
+from .resources import find_user_file
 from .simulation import DEFAULT_SCENE, Simulation
 
 
@@ -91,10 +92,10 @@ def run_program(
 ) -> RunResult:
     """Load the cell, load and start the program (a V+ file or a GPL project
     folder), simulate, report."""
-    program = Path(program)
+    program = find_user_file(program)   # as given, else the bundled file of that name
     if not program.exists():
         raise ProgramError(f"*Nonexistent file* {program}", file=str(program))
-    scene = Path(scene) if scene is not None else DEFAULT_SCENE
+    scene = find_user_file(scene) if scene is not None else DEFAULT_SCENE
     if not scene.exists():
         raise ProgramError(f"{scene}: no such scene file", file=str(scene))
 
