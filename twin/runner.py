@@ -19,6 +19,7 @@ from .errors import ProgramError
 from .language.gpl.runtime import GplSystem
 from .language.vplus.runtime import Console, VPlusSystem
 from .report import Report
+from .resources import find_user_file
 from .simulation import DEFAULT_SCENE, Simulation
 
 
@@ -111,10 +112,10 @@ def start_program(program: str | Path, scene: str | Path | None = None, main: st
                   seed: int | None = None, console: Console | None = None, recorder=None) -> StartedRun:
     """Load the cell and the program and start it (`recorder`: one already made, as
     `twin serve` makes for a live viewer)."""
-    program = Path(program)
+    program = find_user_file(program)   # as given, else the bundled file of that name
     if not program.exists():
         raise ProgramError(f"*Nonexistent file* {program}", file=str(program))
-    scene = Path(scene) if scene is not None else DEFAULT_SCENE
+    scene = find_user_file(scene) if scene is not None else DEFAULT_SCENE
     if not scene.exists():
         raise ProgramError(f"{scene}: no such scene file", file=str(scene))
 

@@ -20,10 +20,10 @@ from .controller.location import Location
 from .controller.scheduler import Scheduler
 from .errors import ProgramError
 from .physics.cell import Cell
+from .resources import bundled
 
 MAJOR_CYCLE_S = 0.016
-REPO_ROOT = Path(__file__).resolve().parent.parent
-DEFAULT_SCENE = REPO_ROOT / "scenes" / "scara_pick.toml"
+DEFAULT_SCENE = bundled("scenes/scara_pick.toml")
 
 
 @dataclass
