@@ -126,7 +126,7 @@ class VPlusSystem:
         self.dialect = "eV+"
         self.sources: dict[str, list[str]] = {}  # file -> its lines, for error messages
         # Logical units; disk files live in `sandbox` (no disk when it is None).
-        self.devices = Devices(sandbox, self.console)
+        self.devices = Devices(sandbox, self.console, clock)
         self.accel_profile = 0  # ACCEL (profile): the robot's acceleration profile number
         self.timers: dict[int, float] = {}  # TIMER n = value: the clock reading that timer n counts from
 
