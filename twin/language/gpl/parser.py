@@ -21,7 +21,7 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
 
 from ...errors import ProgramError
 from . import ast
-from .errors import SYNTAX_ERROR, message
+from .errors import SYNTAX_ERROR, TOO_DEEP, message
 
 
 @lru_cache(maxsize=1)
@@ -51,12 +51,19 @@ def _code_part(line: str) -> str:
 _TIGHT_CONTINUATION = re.compile(r"(?<=[^\w\s])_$")
 
 
-def prepare(text: str) -> str:
+MAX_LINE_LENGTH = 16384  # characters in one source line (docs/gpl.md); the parser's time grows with it
+
+
+def prepare(text: str, file: str = "<string>") -> str:
     """Blank comments, `#` lines and REM lines (keeping line numbers); mark continuations."""
     text = text.removeprefix("\ufeff").removeprefix("\xef\xbb\xbf")  # a byte-order mark from a Windows editor
     lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
     out = []
-    for raw in lines:
+    for number, raw in enumerate(lines, start=1):
+        if len(raw) > MAX_LINE_LENGTH:
+            raise ProgramError(f"{message(TOO_DEEP)}: a line of {len(raw):,} characters (at most "
+                               f"{MAX_LINE_LENGTH:,})", TOO_DEEP, file=file, line=number, column=MAX_LINE_LENGTH + 1,
+                               text=raw[:80] + "...")
         stripped = raw.lstrip()
         if stripped.startswith("#") or re.match(r"rem(\s|$)", stripped, re.I):
             out.append("")
@@ -465,7 +472,7 @@ def parse(text: str, file: str = "<string>") -> ast.SourceFile:
     """Parse one .gpl or .gpo file.  Members outside any Module go to an implicit module."""
     source = ast.SourceFile(file)
     try:
-        items = _ToAst().transform(_parser().parse(prepare(text)))
+        items = _ToAst().transform(_parser().parse(prepare(text, file)))
     except UnexpectedInput as err:
         raise _syntax_error(err, text.replace("\r\n", "\n").split("\n"), file) from None
     loose = []

@@ -14,7 +14,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from . import ast
-from .errors import DUPLICATE_SYMBOL, ILLEGAL_GOTO, INVALID_STATEMENT, TYPE_MISMATCH, UNDEFINED_SYMBOL, UNSUPPORTED
+from .errors import (
+    DUPLICATE_SYMBOL, ILLEGAL_GOTO, INVALID_STATEMENT, TOO_DEEP, TYPE_MISMATCH, UNDEFINED_SYMBOL, UNSUPPORTED,
+)
 from .expressions import ExpressionCompiler
 from .library import CLASSES
 from .scope import mangle
@@ -22,6 +24,7 @@ from .symbols import SType, VarSym
 from .values import CONVERT, DEFAULTS
 
 TRY_BODY, FINALLY = "try", "finally"  # _Block.boundary of a Try's statements and of its Finally
+MAX_BLOCK_DEPTH = 64  # nested blocks in a procedure (docs/gpl.md); Python's own limits may stop sooner
 SLICE_ITERATIONS = 1024  # loop iterations between time slices, as for V+ tasks
 
 
@@ -164,6 +167,7 @@ class ProcCompiler(ExpressionCompiler):
                 raise self.fail(DUPLICATE_SYMBOL, p.name, node)
             self.locals[p.key] = var
             params.append(var.py)
+        self.check_depth(node.body)
         self.collect_locals(node.body)
         self.node = node
         self.emit(0, f"def {self.py}({', '.join(params)}):")
@@ -181,6 +185,18 @@ class ProcCompiler(ExpressionCompiler):
         self.node = None
         self.emit(1, self.return_code(None))
         self.finish()
+
+    def check_depth(self, body: list[ast.Statement]) -> None:
+        """Blocks nested more than MAX_BLOCK_DEPTH deep are -2014 at the first statement
+        that deep (found without recursion; the compiler itself recurses per block)."""
+        pending = [(body, 1)]
+        while pending:
+            statements, depth = pending.pop()
+            for s in statements:
+                inner = _nested_bodies(s)
+                if inner and depth >= MAX_BLOCK_DEPTH:
+                    raise self.fail(TOO_DEEP, f"blocks nested more than {MAX_BLOCK_DEPTH} deep", s)
+                pending.extend((b, depth + 1) for b in inner)
 
     def collect_locals(self, body: list[ast.Statement]) -> None:
         """Every Dim of the procedure, also one inside a block (If, For, Select... as
