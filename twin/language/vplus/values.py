@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import struct
 
+from ...controller.belt import BeltFrame, BeltLocation
 from ...controller.location import Location
 from ...errors import ProgramError
 from . import messages as msg
@@ -135,7 +136,15 @@ def _precision_point(value) -> tuple:
     return value
 
 
-def _compound(a, b) -> Location:
+def _compound(a, b) -> Location | BeltLocation:
+    """a:b.  A belt variable may only be the leftmost element: %belt:loc is a location
+    fixed to the belt (eV+ guide, "Belt-Relative Motion Instructions")."""
+    if isinstance(b, (BeltFrame, BeltLocation)):
+        raise fail(msg.ILLEGAL_OPERATION, "a belt variable must be the leftmost element of a compound location")
+    if isinstance(a, BeltFrame):
+        return BeltLocation(a, _location(b))
+    if isinstance(a, BeltLocation):
+        return a * _location(b)
     return _location(a) * _location(b)
 
 
