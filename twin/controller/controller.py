@@ -474,6 +474,11 @@ class VirtualController:
         yield from self._launch(trajectory, params, destination, cp, straight and isinstance(target, Location))
 
     # ------------------------------------------------------------ belts
+    @property
+    def following_belt(self) -> bool:
+        """The tool is on a belt location, following it (not on its way there or off it)."""
+        return self.tracking is not None and self._belt_motion() is None
+
     def _belt_motion(self) -> _Motion | None:
         return next((m for m in self._motions if m.belt is not None), None)
 
@@ -804,14 +809,14 @@ class VirtualController:
                 q, qd, qdd = q + m.delta[k], m.qd[k], m.qdd[k]
             else:
                 q, qd, qdd = q + m.delta[k], qd + m.qd[k], qdd + m.qdd[k]
-        if qd is not None:
-            if belt is not None:
-                q, qd = self._belt_reference(belt, k_belt, q, qd)
-            elif self.tracking is not None:  # DELAY while tracking: the tool stays on the part
-                q, qd = self.tracking.reference(self.q_command, self._belt_lead)
-                qdd = np.zeros_like(q)
+        if belt is not None:
+            q, qd = self._belt_reference(belt, k_belt, q, qd)
             if q is None:
                 return
+        elif self.tracking is not None:  # DELAY while tracking: the tool stays on the part
+            self._track()
+            qd = None
+        if qd is not None:
             self.q_command = q
             self.cell.set_servo(q, qd, qdd)
         while motions and motions[0].end <= n:

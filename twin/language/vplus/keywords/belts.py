@@ -16,7 +16,7 @@ from ....controller.belt import MAX_VEL_AVG, VELOCITY_CYCLE_S, BeltFrame, BeltLo
 from ....controller.controller import BELT_NOT_ENABLED
 from .. import messages as msg
 from ..values import fail, to_int
-from . import function, instruction
+from . import INSTRUCTIONS, function, instruction, motion  # noqa: F401 (APPROS, aliased below)
 from .locations import location_arg
 
 MAX_ENCODERS = 6  # "Six belt encoders are supported" (eV+ guide, "The Belt Encoder")
@@ -144,6 +144,11 @@ def _latched(rt, select=0):
     if n >= 0:
         return 0.0
     return float(len(_encoder(rt, -n).latches))
+
+
+# The chapter's text and sample program write APPROX for the straight-line approach
+# ("APPROX, DEPARTS, MOVES, and MOVEST can be used"): the same instruction as APPROS.
+INSTRUCTIONS["APPROX"] = INSTRUCTIONS["APPROS"]
 
 
 # ---------------------------------------------------------------- external encoder device
