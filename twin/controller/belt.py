@@ -196,3 +196,16 @@ class BeltMonitor:
 
     def speed_of(self, belt: BeltFrame) -> float:
         return self.counts_per_second(belt.encoder_number, belt.vel_avg) * belt.scale
+
+
+def conveyor_nominal(cell, number: int) -> Location | None:
+    """The frame of the conveyor whose encoder is `number`, in the robot base frame (mm):
+    the centre of the belt's top face, X along the travel (docs/scene.md).  None when no
+    conveyor of the cell carries that encoder."""
+    for conveyor in (getattr(cell, "conveyors", None) or {}).values():
+        encoder = getattr(conveyor, "encoder", None)
+        if encoder is not None and encoder.number == number:
+            T = np.linalg.inv(cell.robot_base_pose()) @ conveyor.frame_world
+            T[:3, 3] *= 1000.0
+            return Location.from_matrix(T)
+    return None
