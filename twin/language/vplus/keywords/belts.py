@@ -16,7 +16,7 @@ from ....controller.belt import MAX_VEL_AVG, VELOCITY_CYCLE_S, BeltFrame, BeltLo
 from ....controller.controller import BELT_NOT_ENABLED
 from .. import messages as msg
 from ..values import fail, to_int
-from . import INSTRUCTIONS, function, instruction, motion  # noqa: F401 (APPROS, aliased below)
+from . import INSTRUCTIONS, Any, function, instruction, motion  # noqa: F401 (APPROS, aliased below)
 from .locations import location_arg
 
 MAX_ENCODERS = 6  # "Six belt encoders are supported" (eV+ guide, "The Belt Encoder")
@@ -61,7 +61,7 @@ def _store(target, belt: BeltFrame):
 
 
 @instruction("DEFBELT", targets=True, writes_back=True)
-def _defbelt(rt, *items):
+def _defbelt(rt, *items: Any):
     """DEFBELT %belt = nominal, encoder, vel_avg, scale: a belt variable on encoder 1..6;
     its speed averaged over vel_avg 16-ms cycles (1..64), scale in mm/count."""
     _enabled(rt)
@@ -81,14 +81,14 @@ def _defbelt(rt, *items):
 
 
 @instruction("SETBELT", targets=True)
-def _setbelt(rt, offset, target):
+def _setbelt(rt, offset, target: Any):
     """SETBELT %belt = offset: the encoder count at which the belt frame is nominal."""
     _enabled(rt)
     belt_arg(target).offset = counter(to_int(offset))
 
 
 @instruction("WINDOW", targets=True, name_values=(2,))
-def _window(rt, *items):
+def _window(rt, *items: Any):
     """WINDOW %belt = upstream, downstream[, program[, priority]]: the working range; a
     violation calls `program` like a reaction (none: an error stops the program)."""
     _enabled(rt)
@@ -103,7 +103,7 @@ def _window(rt, *items):
 
 
 @function("BELT")
-def _belt(rt, belt, mode=0):
+def _belt(rt, belt: Any, mode=0):
     """BELT(%belt, mode): mode 0 the encoder counter now; 2 the oldest photo-eye latch not
     read yet (counts); otherwise the speed in counts per 16-ms cycle, averaged as DEFBELT
     asked (docs/vplus.md)."""
@@ -124,7 +124,7 @@ def _bstatus(rt):
 
 
 @function("WINDOW")
-def _window_test(rt, where, time_ms=0.0, mode=0):
+def _window_test(rt, where: Any, time_ms=0.0, mode=0):
     """WINDOW(%belt:loc, time, mode): mm from the downstream limit (mode 0; negative once
     past it) or past the upstream limit (mode 1; negative before it), `time` ms from now;
     both are positive inside the window."""
@@ -197,7 +197,7 @@ def _setdevice(rt, unit: tuple, items: tuple):
 
 
 @function("DEVICE")
-def _device(rt, kind, unit, error=None, select=0):
+def _device(rt, kind, unit, error: Any = None, select=0):
     """DEVICE(0, unit, error, select): 0 status (no error bits), 1 position, 2 velocity,
     3 position predicted 32 ms ahead, 4 position at the last latch (mm, mm/s)."""
     state, encoder = _device_unit(rt, kind, unit)
