@@ -524,7 +524,7 @@ class ProgramCompiler(LibraryStatements):
         """The Python expression that stores `value` into a real variable:
         DOUBLE variables keep 64 bits, the others are single precision."""
         key = self.key(target)
-        return f"_double({value})" if key in self.scope.doubles else f"_single({value})"
+        return f"_real({value})" if key in self.scope.doubles else f"_single({value})"
 
     def s_SetLocation(self, s: ast.SetLocation, depth: int) -> None:
         self.check_kind(s.target, "LOC")
