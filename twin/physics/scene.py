@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
-import tomllib
+import sys
 from pathlib import Path
 
 from ..errors import SceneError
+from ..resources import resource_root
 from .schema import Scene, validate_scene
 
-REPO_ROOT = Path(__file__).resolve().parents[2]
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # Python 3.10: the same parser, as a package
+    import tomli as tomllib
 
 
 def load_scene(path: str | Path) -> dict:
@@ -26,12 +30,13 @@ def load_scene(path: str | Path) -> dict:
 
 
 def resolve(path: str, scene_path: Path, key: str = "model") -> Path:
-    """Model paths in a scene are relative to the scene file or to the repository."""
-    for base in (Path(scene_path).parent, REPO_ROOT):
+    """Model paths in a scene are relative to the scene file or to twin's bundled
+    resources (models/ in the repository or in the installed package)."""
+    for base in (Path(scene_path).parent, resource_root()):
         candidate = (base / path).resolve()
         if candidate.exists():
             return candidate
-    raise SceneError(f"{key}: {path!r} not found next to the scene nor in {REPO_ROOT}",
+    raise SceneError(f"{key}: {path!r} not found next to the scene nor in {resource_root()}",
                      file=str(scene_path))
 
 
