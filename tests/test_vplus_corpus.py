@@ -209,6 +209,31 @@ def test_written_cases(body, code, line):
     assert_located(err, code, 1 + where, body[line - 1])
 
 
+@pytest.mark.parametrize("section, code", [
+    (".LOCATIONS\nspot 1 2\n.END", msg.SYNTAX_ERROR),
+    (".LOCATIONS\nspot a b c d e f\n.END", msg.SYNTAX_ERROR),
+    (".LOCATIONS\n$s 1 2 3 4 5 6\n.END", msg.WRONG_TYPE),
+    (".LOCATIONS\nspot 1E400 0 0 0 0 0\n.END", msg.OVERFLOW),
+    (".REALS\nx =\n.END", msg.SYNTAX_ERROR),
+    (".REALS\nx = 1E400\n.END", msg.OVERFLOW),
+    (".REALS\nx = 1E39\n.END", msg.OVERFLOW),
+    (".REALS\n$s = 1\n.END", msg.WRONG_TYPE),
+    (".REALS\n#p = 1\n.END", msg.WRONG_TYPE),
+    (".REALS\nx[-1] = 5\n.END", msg.SYNTAX_ERROR),
+    (".STRINGS\ns = \"a\"\n.END", msg.WRONG_TYPE),
+    (".STRINGS\n$s = \"open\n.END", msg.SYNTAX_ERROR),
+    (".STRINGS\n$s = \"" + "x" * 129 + "\"\n.END", msg.STRING_TOO_LONG),
+    (".DOUBLES\nd = abc\n.END", msg.SYNTAX_ERROR),
+])
+def test_broken_data_sections_are_located_errors(section, code):
+    # docs/vplus.md "Program files": the layout STOREL/STORER/STORES write; values as in
+    # programs ([000] "String Data Type", L3868-3895).
+    with pytest.raises(ProgramError) as caught:
+        run_vplus(".PROGRAM t()\n.END\n" + section + "\n")
+    err = caught.value
+    assert err.code == code and err.line == 4 and err.text == section.split("\n")[1], str(err)
+
+
 @pytest.mark.parametrize("depth", [100, MAX_NESTING])
 @pytest.mark.parametrize("head", ["IF n == 1 THEN", "FOR i = 1 TO 1", "WHILE n == 1 DO", "DO"])
 def test_blocks_nested_within_the_limit_run(head, depth):
