@@ -335,3 +335,18 @@ def test_argument_checks_come_from_the_keyword_signatures():
     assert argument_check(FUNCTIONS["LEN"], 0) == "_str"
     assert inspect.signature(FUNCTIONS["MAX"]).parameters  # *xs: every argument a real
     assert argument_check(FUNCTIONS["MAX"], 7) == "_real"
+
+
+@pytest.mark.parametrize("seconds", ["1E6", "1E30"])
+def test_a_very_long_delay_is_a_wait_in_constant_memory(seconds):
+    # Issue #14: DELAY 1E6 allocated a sampled standing-still trajectory (15 GiB) and
+    # DELAY 1E30 crashed.  DELAY is a motion that stands still ([000] motion table): its
+    # samples are broadcast views of one row, whatever its length (docs/motion.md).
+    from test_motion_controller import run_on_cell
+
+    text = f'.PROGRAM t()\n    DELAY {seconds}\n    TYPE "forward"\n.END\n'
+    sim, task, outcome, rows = run_on_cell(text, max_time=0.5)
+    assert task.error is None and task.system.console.output == "forward\n"  # forward processing
+    (still,) = sim.controller._motions
+    assert still.q.strides[0] == 0 and still.qd.strides[0] == 0 and still.delta.strides[0] == 0
+    assert still.last >= 0.5 / sim.controller.dt  # it is still standing still when the run ends
