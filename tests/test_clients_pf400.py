@@ -36,7 +36,7 @@ def test_the_pf400_is_a_scara_with_the_column_first(kin):
 
 
 @pytest.mark.parametrize("righty", [True, False])
-@pytest.mark.parametrize("pose", [(300, -150, 87.2, 0), (150, 300, 78, 90), (420, 200, 300, -135)])
+@pytest.mark.parametrize("pose", [(300, -150, 87.2, 0), (450, 0, 150, 45), (420, 200, 300, -135)])
 def test_inverse_kinematics_round_trips_in_both_arm_configurations(kin, pose, righty):
     x, y, z, yaw = pose
     T = vplus_to_matrix([x, y, z, yaw, 90, 180])
