@@ -76,7 +76,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
 
     run = sub.add_parser("run", help="run a V+ program or a GPL project on a cell")
-    run.add_argument("program", help="V+ program file (.pg, .v2) or GPL project folder (with Project.gpr)")
+    run.add_argument("program", nargs="+", help="V+ program files (.pg, .v2; loaded together, the first "
+                     "file's first program starts) or a GPL project folder (with Project.gpr)")
     run.add_argument("--scene", default=None, help="cell description (default: scenes/scara_pick.toml)")
     run.add_argument("--main", default=None, help="program to execute (default: the first .PROGRAM; "
                      "GPL: the start procedure of Project.gpr)")
