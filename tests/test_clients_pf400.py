@@ -73,3 +73,13 @@ def test_a_vplus_program_moves_the_plate_between_the_nests():
     assert z == pytest.approx(770.0 + 14.35 / 2, abs=0.5)  # resting on it
     kinds = [e["kind"] for e in report.events]
     assert kinds.count("grasp") == 1 and kinds.count("release") == 1
+
+
+def test_a_gpl_program_for_the_pf400_runs_in_its_own_coordinates():
+    """Plate-centre tool, pitch 90, ZWorld approaches, GPL_Righty; Where, WhereAngles
+    and the plate-present input read as on the robot."""
+    result = run_program(DATA / "gpl" / "pf400_plate", scene="scenes/pf400_plates.toml")
+    report = result.report
+    assert report.errors == []
+    assert report.output.splitlines() == ["at pick 350 -150 pitch 90 config 1", "J1 97.2", "holding True"]
+    assert report.regions["nest_b"] == 1
