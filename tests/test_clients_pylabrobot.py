@@ -9,11 +9,6 @@ from __future__ import annotations
 
 import asyncio
 import json
-import signal
-import socket
-import subprocess
-import sys
-import time
 
 import pytest
 
@@ -21,6 +16,8 @@ from pylabrobot.arms.precise_flex.coords import ElbowOrientation, PreciseFlexCar
 from pylabrobot.arms.precise_flex.pf_400 import PreciseFlex400Backend
 from pylabrobot.arms.precise_flex.precise_flex_backend import PreciseFlexError
 from pylabrobot.resources import Coordinate, Rotation
+
+from clients_helpers import serving
 
 PORT = 10100
 PLATE_WIDTH = 85.48  # mm, the portrait side of an SBS plate
@@ -30,18 +27,6 @@ def pose(x, y, z, yaw=0.0) -> PreciseFlexCartesianCoords:
     """The gripper level, fingers down (pitch 90, roll 180), elbow right."""
     return PreciseFlexCartesianCoords(location=Coordinate(x, y, z), rotation=Rotation(x=180.0, y=90.0, z=yaw),
                                       orientation=ElbowOrientation.RIGHT)
-
-
-def wait_for_port(process: subprocess.Popen) -> None:
-    for _ in range(600):
-        if process.poll() is not None:
-            raise RuntimeError(process.stderr.read())
-        try:
-            socket.create_connection(("127.0.0.1", PORT), timeout=1).close()
-            return
-        except OSError:
-            time.sleep(0.05)
-    raise RuntimeError("twin serve never listened")
 
 
 async def session(log: dict) -> None:
@@ -77,21 +62,11 @@ async def session(log: dict) -> None:
 
 def test_pylabrobot_drives_the_tcs_and_moves_the_plate(tmp_path):
     report = tmp_path / "report.json"
-    process = subprocess.Popen(
-        [sys.executable, "-m", "twin.cli", "serve", "programs/gpl/tcs", "--scene", "scenes/pf400_plates.toml",
-         "--fast", "--report", str(report)],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )
     log: dict = {}
-    try:
-        wait_for_port(process)
+    arguments = ["programs/gpl/tcs", "--scene", "scenes/pf400_plates.toml", "--fast", "--report", str(report)]
+    with serving(arguments, PORT) as served:
         asyncio.run(asyncio.wait_for(session(log), timeout=300))
-        process.send_signal(signal.SIGINT)
-        _, errors = process.communicate(timeout=60)
-    finally:
-        if process.poll() is None:
-            process.kill()
-    assert process.returncode == 0, errors
+    assert served.returncode == 0, served.stderr
 
     assert "TCS" in log["version"]
     assert set(log["start_joints"]) >= {1, 2, 3, 4, 5}
