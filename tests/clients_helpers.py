@@ -1,46 +1,64 @@
-"""`twin serve` as a test's peer: started in a subprocess, stopped with Ctrl-C (SIGINT)."""
+"""`twin serve` as a test's peer, in a subprocess, on free ports (`--port P=0`: test runs
+side by side never fight over 10100 or 11000); stopped with Ctrl-C (SIGINT)."""
 
 from __future__ import annotations
 
+import re
 import signal
-import socket
 import subprocess
 import sys
+import threading
 import time
 from contextlib import contextmanager
+
+LISTENING = re.compile(r"twin serve: listening on 127\.0\.0\.1:(\d+)(?: \(port (\d+) in the program\))?")
 
 
 class Served:
     def __init__(self, process: subprocess.Popen):
         self.process = process
-        self.stderr = ""  # what twin serve printed, once it has stopped
+        self.lines: list[str] = []  # what twin serve printed on stderr so far
         self.returncode: int | None = None
+        threading.Thread(target=self._read, daemon=True).start()
 
+    def _read(self) -> None:
+        for line in self.process.stderr:
+            self.lines.append(line)
 
-def wait_for_port(process: subprocess.Popen, port: int) -> None:
-    for _ in range(1200):
-        if process.poll() is not None:
-            raise RuntimeError(process.stderr.read())
-        try:
-            socket.create_connection(("127.0.0.1", port), timeout=1).close()
-            return
-        except OSError:
-            time.sleep(0.05)
-    raise RuntimeError(f"twin serve never listened on {port}")
+    @property
+    def stderr(self) -> str:
+        return "".join(self.lines)
+
+    def port(self, program_port: int, timeout: float = 60.0) -> int:
+        """The real port the program's `program_port` listens on, once it does."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            for line in list(self.lines):
+                match = LISTENING.match(line)
+                if match and int(match[2] or match[1]) == program_port:
+                    return int(match[1])
+            if self.process.poll() is not None:
+                time.sleep(0.2)  # let the reader take the last lines
+                raise RuntimeError(f"twin serve ended: {self.stderr}")
+            time.sleep(0.02)
+        raise RuntimeError(f"port {program_port} never listened: {self.stderr}")
 
 
 @contextmanager
-def serving(arguments: list[str], port: int):
-    """`twin serve ARGUMENTS` until the block ends, then Ctrl-C; yields a Served whose
-    stderr and returncode are set after the block."""
-    process = subprocess.Popen([sys.executable, "-m", "twin.cli", "serve", *arguments],
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+def serving(arguments: list[str], program_ports: list[int]):
+    """`twin serve ARGUMENTS` with each of `program_ports` moved to a free port, until the
+    block ends; yields a Served (its stderr and returncode are final after the block)."""
+    moves = [item for port in program_ports for item in ("--port", f"{port}=0")]
+    process = subprocess.Popen([sys.executable, "-m", "twin.cli", "serve", *arguments, *moves],
+                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     served = Served(process)
     try:
-        wait_for_port(process, port)
+        for port in program_ports:
+            served.port(port)
         yield served
         process.send_signal(signal.SIGINT)
-        _, served.stderr = process.communicate(timeout=60)
+        process.wait(timeout=60)
+        time.sleep(0.2)  # the reader's last lines
         served.returncode = process.returncode
     finally:
         if process.poll() is None:

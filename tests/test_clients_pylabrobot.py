@@ -19,7 +19,7 @@ from pylabrobot.resources import Coordinate, Rotation
 
 from clients_helpers import serving
 
-PORT = 10100
+PORT = 10100  # the TCS's port, moved to a free one by the test
 PLATE_WIDTH = 85.48  # mm, the portrait side of an SBS plate
 
 
@@ -29,8 +29,8 @@ def pose(x, y, z, yaw=0.0) -> PreciseFlexCartesianCoords:
                                       orientation=ElbowOrientation.RIGHT)
 
 
-async def session(log: dict) -> None:
-    arm = PreciseFlex400Backend(host="127.0.0.1", port=PORT, timeout=20)
+async def session(log: dict, port: int) -> None:
+    arm = PreciseFlex400Backend(host="127.0.0.1", port=port, timeout=20)
     await arm.setup()
     log["version"] = await arm.get_version()
     log["start_joints"] = await arm.get_joint_position()
@@ -64,8 +64,8 @@ def test_pylabrobot_drives_the_tcs_and_moves_the_plate(tmp_path):
     report = tmp_path / "report.json"
     log: dict = {}
     arguments = ["programs/gpl/tcs", "--scene", "scenes/pf400_plates.toml", "--fast", "--report", str(report)]
-    with serving(arguments, PORT) as served:
-        asyncio.run(asyncio.wait_for(session(log), timeout=300))
+    with serving(arguments, [PORT]) as served:
+        asyncio.run(asyncio.wait_for(session(log, served.port(PORT)), timeout=300))
     assert served.returncode == 0, served.stderr
 
     assert "TCS" in log["version"]

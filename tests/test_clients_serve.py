@@ -6,13 +6,13 @@ import json
 import time
 
 from clients_helpers import serving
-from test_clients_ros import MOTION_PORT, REPLY, SUCCESS, connect, receive_message, trajectory_point
+from test_clients_ros import MOTION_PORT, STATE_PORT, REPLY, SUCCESS, connect, receive_message, trajectory_point
 
 
 def test_serve_runs_in_real_time_prints_ports_and_writes_the_report_at_ctrl_c(tmp_path):
     report = tmp_path / "report.json"
-    with serving(["programs/vplus/ros_server.pg", "--report", str(report)], MOTION_PORT) as served:
-        motion = connect(MOTION_PORT)
+    with serving(["programs/vplus/ros_server.pg", "--report", str(report)], [MOTION_PORT, STATE_PORT]) as served:
+        motion = connect(served.port(MOTION_PORT))
         started = time.monotonic()
         motion.sendall(trajectory_point(3, [0.2, 0.3, 0.01, 0.5], velocity=1.0))
         kind, comm, code, _ = receive_message(motion)
@@ -20,8 +20,7 @@ def test_serve_runs_in_real_time_prints_ports_and_writes_the_report_at_ctrl_c(tm
         motion.close()
         assert (comm, code) == (REPLY, SUCCESS)
     assert served.returncode == 0, served.stderr
-    assert "twin serve: listening on 127.0.0.1:11000" in served.stderr
-    assert "twin serve: listening on 127.0.0.1:11002" in served.stderr
+    assert "(port 11000 in the program)" in served.stderr and "(port 11002 in the program)" in served.stderr
     assert "twin serve: stopped" in served.stderr
     data = json.loads(report.read_text())
     assert data["errors"] == []
