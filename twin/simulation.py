@@ -54,9 +54,6 @@ class Simulation:
         self.recorder = recorder
         self._events_recorded = 0  # cell events already sent to the recorder
         self.settle_s = float(controller_cfg.get("settle_after_program_s", 3.0))
-        # A plate-present sensor on the gripper (scene `[gripper] holding_input`): the input
-        # is on while the jaws hold a part, as a servo gripper's "not fully closed" test tells.
-        self.holding_input = self.cell.scene["gripper"].get("holding_input")
 
     def taught_locations(self) -> dict[str, Location]:
         return {name: Location(*values) for name, values in self.cell.locations().items()}
@@ -95,8 +92,6 @@ class Simulation:
             for _ in range(steps):
                 controller.servo_step()
                 cell.step(1)
-            if self.holding_input is not None:
-                self.io.set(int(self.holding_input), cell.gripper_holding() is not None)
             collisions = cell.take_collisions()
             if collisions and not crashed:  # the first one stops everything; all are events
                 crashed = True
