@@ -46,6 +46,17 @@ def _run(args: argparse.Namespace) -> int:
     return 1 if report.errors else 0
 
 
+def _port_pair(text: str) -> tuple[int, int]:
+    program, sep, real = text.partition("=")
+    try:
+        pair = int(program), int(real)
+    except ValueError:
+        pair = None
+    if not sep or pair is None or not all(0 <= p <= 65535 for p in pair):
+        raise argparse.ArgumentTypeError(f"{text!r}: expected PROGRAM=REAL port numbers, e.g. 10100=0")
+    return pair
+
+
 def _serve(args: argparse.Namespace) -> int:
     """Keep the cell running for client software (twin/serve.py)."""
     from .serve import serve_program
@@ -53,7 +64,7 @@ def _serve(args: argparse.Namespace) -> int:
     try:
         result = serve_program(args.program, scene=args.scene, main=args.main, report_path=args.report,
                                rrd_path=args.rrd, viewer=args.viewer, fast=args.fast, speed=args.speed,
-                               seed=args.seed, max_sim_time=args.max_sim_time)
+                               seed=args.seed, max_sim_time=args.max_sim_time, ports=dict(args.port))
     except ProgramError as err:
         print(str(err), file=sys.stderr)
         return 2 if err.code is None else 1
@@ -99,6 +110,9 @@ def build_parser() -> argparse.ArgumentParser:
     serve.add_argument("--speed", type=float, default=1.0, help="simulated seconds per wall second (default 1)")
     serve.add_argument("--max-sim-time", type=float, default=float("inf"), help="stop after this many simulated seconds")
     serve.add_argument("--seed", type=int, default=None, help="random seed (default: the scene's)")
+    serve.add_argument("--port", type=_port_pair, action="append", default=[], metavar="PROGRAM=REAL",
+                       help="listen on loopback port REAL where the program asks for PROGRAM (0: any free "
+                       "port; the ports used are printed); may be repeated")
     serve.set_defaults(handler=_serve)
 
     check = sub.add_parser("check", help="check a report against expectations")

@@ -81,6 +81,8 @@ class Gripper(Section):
     vacuum_output: Output | None = None  # output that turns the vacuum on (besides CLOSEI)
     blowoff_output: Output | None = None  # output that blows the part off
     vacuum_input: Input | None = None    # input on while the cup holds a part (vacuum sensed)
+    # fingers only
+    holding_input: Input | None = None   # input on while the jaws hold a part (a servo gripper's plate test)
 
     @model_validator(mode="after")
     def _suction_keys(self) -> "Gripper":
@@ -89,6 +91,8 @@ class Gripper(Section):
                     if getattr(self, k) is not None]
             if used:
                 raise ValueError(f"{', '.join(used)}: only for type = \"suction\"")
+        elif self.holding_input is not None:
+            raise ValueError("holding_input: only for type = \"fingers\" (a cup has vacuum_input)")
         return self
 
 
@@ -301,8 +305,8 @@ class Scene(Section):
                 if s.latch_encoder is not None and s.latch_encoder not in encoders:
                     raise ValueError(f"sensor[{i}].latch_encoder: no conveyor has encoder "
                                      f"{s.latch_encoder} (encoders: {encoders or 'none'})")
-        inputs = [s.input for s in self.sensor] + (
-            [self.gripper.vacuum_input] if self.gripper.vacuum_input is not None else [])
+        inputs = [s.input for s in self.sensor] + [
+            i for i in (self.gripper.vacuum_input, self.gripper.holding_input) if i is not None]
         for i, s in enumerate(self.sensor):
             if inputs.count(s.input) > 1:
                 raise ValueError(f"sensor[{i}].input: input {s.input} is wired twice")

@@ -65,8 +65,8 @@ class Any:
     """Anything: the keyword checks it itself (an array, a value of either kind)."""
 
 
-# kind name (as written in an annotation) -> the check the generated code applies
-# (runtime.values), None: none
+# kind name (as written in an annotation) -> the check the generated code applies (values.py);
+# None, and any other annotation (tuple: an I/O statement's unit and items), checks nothing
 _CHECKS = {"Loc": "_location", "Point": "_point", "Str": "_str", "Any": None, "float": "_real"}
 
 
