@@ -36,6 +36,7 @@ import trimesh
 import numpy as np
 
 from ..controller.kinematics import RobotKinematics
+from .camera import add_camera, cameras_of
 from .geometry import MM, matrix_to_quat, vplus_to_matrix, yaw_quat
 from .regions import Regions
 from .scene import load_scene, resolve
@@ -211,6 +212,10 @@ class Cell:
             spec.add_equality(name=f"grasp_{i}", type=mujoco.mjtEq.mjEQ_WELD,
                               objtype=mujoco.mjtObj.mjOBJ_BODY, name1=f"{self._gp}gripper_base",
                               name2=f"part_{i}", active=False, solref=[0.004, 1.0])
+
+        self.cameras = cameras_of(sc)  # [[camera]] components
+        for camera in self.cameras:
+            add_camera(spec, camera)
 
         self.spec = spec
         self.model = spec.compile()
