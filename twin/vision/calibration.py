@@ -62,12 +62,18 @@ class CameraModel:
         return c[:2] + world[:, :2] * s[:, None]
 
     def plane_to_pixels(self, xy_mm: np.ndarray, z_mm: float) -> np.ndarray:
-        """Robot (x, y) on the plane z -> image points (N x 2)."""
+        """Robot (x, y) on the plane z -> image points (N x 2): OpenCV's camera model
+        (radial k1 k2 k3, tangential p1 p2), vectorised for whole view grids."""
         xy = np.asarray(xy_mm, dtype=np.float64).reshape(-1, 2)
-        pts = np.concatenate([xy, np.full((len(xy), 1), z_mm)], axis=1)
-        rvec, _ = cv2.Rodrigues(self.R)
-        px, _ = cv2.projectPoints(pts, rvec, self.t, self.K, self.dist)
-        return px.reshape(-1, 2)
+        cam = xy @ self.R[:, :2].T + (self.R[:, 2] * z_mm + self.t)
+        xn, yn = cam[:, 0] / cam[:, 2], cam[:, 1] / cam[:, 2]
+        k1, k2, p1, p2, k3 = (list(self.dist) + [0.0] * 5)[:5]
+        r2 = xn * xn + yn * yn
+        radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3))
+        xd = xn * radial + 2 * p1 * xn * yn + p2 * (r2 + 2 * xn * xn)
+        yd = yn * radial + p1 * (r2 + 2 * yn * yn) + 2 * p2 * xn * yn
+        K = self.K
+        return np.stack([K[0, 0] * xd + K[0, 1] * yd + K[0, 2], K[1, 1] * yd + K[1, 2]], axis=1)
 
     def to_dict(self) -> dict:
         return {"K": self.K.tolist(), "dist": self.dist.tolist(), "R": self.R.tolist(),
