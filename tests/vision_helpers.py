@@ -31,7 +31,7 @@ def plate_layout(seed: int, count: int = 5, flipped: tuple[int, ...] = (),
     rng = np.random.default_rng(seed)
     poses: list[tuple[float, float, float, bool]] = [(x, y, 0.0, False) for x, y in keep_clear]
     while len(poses) < count + len(keep_clear):
-        x, y = rng.uniform(-110, 110), rng.uniform(-75, 75)
+        x, y = rng.uniform(-90, 90), rng.uniform(-120, 120)
         if all(math.hypot(x - p[0], y - p[1]) > 55 for p in poses):
             poses.append((float(x), float(y), float(rng.uniform(-180, 180)), len(poses) - len(keep_clear) in flipped))
     return poses[len(keep_clear):]

@@ -59,6 +59,7 @@ def _start_vplus(sim: Simulation, program: Path, main: str | None, console: Cons
                  sandbox: Path) -> VPlusSystem:
     system = VPlusSystem(sim.controller, sim.io, sim.clock, console=console, seed=sim.cell.seed,
                          sandbox=sandbox)
+    system.vision = sim.vision
     for name, location in sim.taught_locations().items():
         system.define_location(name, location)
     names = system.load(program)
@@ -74,6 +75,7 @@ def _start_gpl(sim: Simulation, project: Path, main: str | None, console: Consol
     (`main` overrides it)."""
     system = GplSystem(sim.controller, sim.io, sim.clock, sim.scheduler, console=console, sandbox=sandbox,
                        seed=sim.cell.seed)
+    system.vision = sim.vision
     system.load_project(project)
     system.start(main)
     return system
@@ -100,6 +102,8 @@ def run_program(
 
     sim = Simulation(scene, seed=seed)
     sim.recorder = _open_recorder(sim, rrd_path)
+    if sim.vision is not None:
+        sim.vision.recorder = sim.recorder
     sandbox = _sandbox(program, report_path or rrd_path)
     if program.is_dir():
         system = _start_gpl(sim, program, main, console, sandbox)
@@ -108,7 +112,11 @@ def run_program(
 
     if sim.recorder is not None:
         sim.recorder.log_text(0.0, f"twin run {program} on {scene}")
-    outcome = sim.run(max_sim_time=max_sim_time)
+    try:
+        outcome = sim.run(max_sim_time=max_sim_time)
+    finally:
+        if sim.vision is not None:
+            sim.vision.close()
     if sim.recorder is not None:
         sim.recorder.log_text(sim.cell.time, system.console.output or "(no output)")
         sim.recorder.close()

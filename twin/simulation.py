@@ -19,6 +19,7 @@ from .controller.location import Location
 from .controller.scheduler import Scheduler
 from .errors import ProgramError
 from .physics.cell import Cell
+from .vision.server import VisionServer
 
 MAJOR_CYCLE_S = 0.016
 REPO_ROOT = Path(__file__).resolve().parent.parent
@@ -51,6 +52,7 @@ class Simulation:
         self.io = DigitalIO()
         self.scheduler = Scheduler()
         self.recorder = recorder
+        self.vision = VisionServer.for_cell(self.cell, self.cell.scene, self.scene_path)  # None without [vision]
         self._events_recorded = 0  # cell events already sent to the recorder
         self.settle_s = float(controller_cfg.get("settle_after_program_s", 3.0))
 

@@ -37,7 +37,7 @@ class CameraConfig:
     pose: tuple[float, ...] = (0.0, 0.0, 1000.0, 0.0, 180.0, 0.0)
     mount: str | None = None  # body the camera is fixed to; None: the world
     distortion: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0, 0.0)  # k1 k2 p1 p2 k3
-    exposure: float = 1.0  # gain on the rendered intensities
+    exposure: float = 1.0  # gain on the light reaching the sensor (before it saturates)
     noise: float = 0.0  # standard deviation of the image noise, grey levels
     seed: int = 0
     light: dict | None = None  # {pos = [x, y, z] mm world, diffuse = [r, g, b]}

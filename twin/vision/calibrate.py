@@ -60,3 +60,23 @@ def calibrate(model: mujoco.MjModel, data: mujoco.MjData, config: CameraConfig,
         camera.close()
     result = solve(np.array(points), np.array(pixels), (config.width, config.height))
     return result, record
+
+
+def calibrate_scene(scene_path: str | Path, camera: str | None = None) -> list[tuple[CameraConfig, CameraModel, Path]]:
+    """``twin calibrate``: calibrate every camera of a cell file that has a plan (or the
+    one named), write each result to its plan's file; returns (camera, model, file)."""
+    from ..physics.cell import Cell
+
+    cell = Cell.from_scene(scene_path)
+    done = []
+    for config in cell.cameras:
+        if config.calibration is None or (camera is not None and config.name != camera):
+            continue
+        model, _ = calibrate(cell.model, cell.data, config, cell.robot_base_pose())
+        path = calibration_file(config, Path(scene_path))
+        model.save(path)
+        done.append((config, model, path))
+    if not done:
+        raise ValueError(f"{scene_path}: no camera with a [camera.calibration] plan"
+                         + (f" named {camera!r}" if camera else ""))
+    return done

@@ -2,8 +2,9 @@
 
 An image is taken only when asked (a vision process, the recorder): nothing renders per
 step.  The renderer is a pinhole with square pixels and the principal point at the image
-centre; lens distortion (OpenCV's k1, k2, p1, p2, k3 model) is applied to the rendered
-image with ``cv2.remap``, then the exposure gain and seeded Gaussian noise.  The noise of
+centre.  The exposure scales every light of the scene as the camera renders it (the light
+that reaches the sensor, before it saturates); lens distortion (OpenCV's k1, k2, p1, p2,
+k3 model) is applied to the rendered image with ``cv2.remap``, then seeded Gaussian noise.  The noise of
 frame n of a camera is drawn from ``default_rng([seed, n])``: the same run gives the same
 images bit for bit.  Headless rendering needs ``MUJOCO_GL=egl`` (Mesa llvmpipe on a machine
 without a GPU) or ``MUJOCO_GL=osmesa``.
@@ -86,7 +87,14 @@ class Camera:
         costs about 0.25 s a frame on llvmpipe (23 ms without), and a vision cell's lights
         are diffuse anyway."""
         renderer.update_scene(data, camera=self.model_name)
-        renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
+        scene = renderer.scene
+        scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
+        gain = float(self.config.exposure)
+        if gain != 1.0:  # exposure: all light reaching the sensor scales, before it clips
+            for light in scene.lights[:scene.nlight]:
+                light.ambient = np.asarray(light.ambient) * gain
+                light.diffuse = np.asarray(light.diffuse) * gain
+                light.specular = np.asarray(light.specular) * gain
 
     def _lens(self) -> tuple[np.ndarray, np.ndarray] | None:
         """Remap tables that distort a pinhole image: for each pixel of the distorted
@@ -105,17 +113,15 @@ class Camera:
         return self._distort_map
 
     def _develop(self, rgb: np.ndarray) -> np.ndarray:
-        """Lens, exposure and sensor noise on a rendered picture."""
+        """Lens and sensor noise on a rendered picture."""
         c = self.config
         lens = self._lens()
         if lens is not None:
             rgb = cv2.remap(rgb, *lens, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
-        if c.exposure == 1.0 and c.noise == 0.0:
+        if c.noise == 0.0:
             return rgb
-        out = rgb.astype(np.float32) * float(c.exposure)
-        if c.noise > 0.0:
-            rng = np.random.default_rng([int(c.seed), self.frames])
-            out += rng.normal(0.0, float(c.noise), out.shape).astype(np.float32)
+        rng = np.random.default_rng([int(c.seed), self.frames])
+        out = rgb.astype(np.float32) + rng.normal(0.0, float(c.noise), rgb.shape).astype(np.float32)
         return np.clip(np.rint(out), 0, 255).astype(np.uint8)
 
     def close(self) -> None:

@@ -4,9 +4,9 @@ Each tool reads the metric top view of its plane (view.py) and returns ``Instanc
 robot coordinates (mm, degrees).  Parameters come from the cell file, one ``[[vision.process]]``
 per job (process.py).
 
-* Blob: threshold, outer contours, area moments -> centroid, principal-axis angle (modulo
-  180), area, width and length of the minimum-area rectangle; score = area over that
-  rectangle's area (1 for a rectangle).
+* Blob: threshold, outer contours, area moments -> centroid and area; the minimum-area
+  rectangle -> width, length and the angle of the long side (modulo 180, modulo 90 for a
+  square); score = area over that rectangle's area (1 for a rectangle).
 * Pattern: normalised cross-correlation with a model drawn from the part's outline (its
   CAD polygon, mm), rotated over the full turn: a coarse search on a reduced view, then
   angle and position refined on the full view with a parabola through the best scores.
@@ -46,8 +46,11 @@ class Instance:
     actual: float | None = None
 
     def measure(self, name: str) -> float:
+        """An inspected property; ``upright`` is 1 unless a pattern matched the mirror image."""
+        if name == "upright":
+            return 0.0 if self.model.endswith("mirrored") else 1.0
         if name not in ("area", "width", "length", "score", "angle"):
-            raise ValueError(f"inspection: no property {name!r} (area, width, length, score, angle)")
+            raise ValueError(f"inspection: no property {name!r} (area, width, length, score, angle, upright)")
         return float(getattr(self, name))
 
 
@@ -80,14 +83,25 @@ class BlobLocator:
             if x0 <= 0 or y0 <= 0 or x0 + w >= cols - 1 or y0 + h >= rows - 1:
                 continue  # cut by the edge of the view: not a whole part
             cx, cy = m["m10"] / m["m00"], m["m01"] / m["m00"]
-            angle = 0.5 * math.degrees(math.atan2(2 * m["mu11"], m["mu20"] - m["mu02"]))
-            (_, _), (rw, rh), _ = cv2.minAreaRect(pts)
-            width, length = sorted((rw * s, rh * s))
+            angle, width, length = _rectangle(pts, s)
             x, y = view.to_robot([cx, cy])[0]
             found.append(Instance(x=float(x), y=float(y), z=view.z, angle=_wrap180(angle),
                                   score=float(min(1.0, area / max(width * length, 1e-9))), area=float(area),
                                   width=float(width), length=float(length), outline=pts))
         return _sorted(found, self.sort)
+
+
+def _rectangle(pts: np.ndarray, scale: float) -> tuple[float, float, float]:
+    """Angle of the long side (deg, modulo 180; modulo 90 for a square, within 5 %) and the
+    width and length (mm) of the minimum-area rectangle around a contour."""
+    (_, _), (w, h), a = cv2.minAreaRect(pts)
+    if w < h:
+        w, h, a = h, w, a + 90.0
+    a = _wrap180(a)
+    a = a - 180.0 if a > 90.0 else a + 180.0 if a <= -90.0 else a
+    if h > 0.95 * w:
+        a = (a + 45.0) % 90.0 - 45.0
+    return a, h * scale, w * scale
 
 
 def _sorted(found: list[Instance], key: str) -> list[Instance]:
