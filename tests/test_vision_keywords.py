@@ -6,6 +6,7 @@ from __future__ import annotations
 import pytest
 
 from conftest import ROOT
+from twin.errors import ProgramError
 from twin.runner import run_program
 
 SCENE = ROOT / "scenes" / "scara_vision.toml"
@@ -56,13 +57,18 @@ def test_vparameter_sets_what_the_tool_uses(tmp_path):
     ('    VRUN $ip, 1\n    TYPE VRESULT($ip, 1, 2, 1, 1310)\n', -3209),  # still running
     ('    VRUN $ip, 1\n    VWAITI (1) $ip, 0\n    TYPE VRESULT($ip, 1, 2, 1, 4242)\n', -407),
     ('    PARAMETER VTIMEOUT = 0.01\n    VRUN $ip, 1\n    VWAITI (1) $ip, 0\n', -3208),
-    ('    VRUN 42, 1\n', -412),
 ])
 def test_vplus_mistakes_are_located_errors(tmp_path, body, code):
     report = _vplus(tmp_path, body)
     assert len(report.errors) == 1
     assert report.errors[0]["code"] == code
     assert report.errors[0]["line"] == 4 + body.count("\n")  # the last line of the body
+
+
+def test_an_address_that_is_not_a_string_is_a_load_time_error(tmp_path):
+    with pytest.raises(ProgramError) as caught:
+        _vplus(tmp_path, "    VRUN 42, 1\n")
+    assert caught.value.code == -412 and caught.value.line == 5
 
 
 def _gpl(tmp_path, body: str):

@@ -19,6 +19,7 @@ from .errors import ProgramError
 from .language.gpl.runtime import GplSystem
 from .language.vplus.runtime import Console, VPlusSystem
 from .report import Report
+from .resources import find_user_file
 from .simulation import DEFAULT_SCENE, Simulation
 
 
@@ -55,16 +56,17 @@ def _sandbox(program: Path, output: str | Path | None) -> Path:
     return Path(output).resolve().parent / f"{program.stem}-files"
 
 
-def _start_vplus(sim: Simulation, program: Path, main: str | None, console: Console | None,
+def _start_vplus(sim: Simulation, programs: list[Path], main: str | None, console: Console | None,
                  sandbox: Path) -> VPlusSystem:
+    """Load every V+ file (LOAD of several modules); the first file's first program starts."""
     system = VPlusSystem(sim.controller, sim.io, sim.clock, console=console, seed=sim.cell.seed,
                          sandbox=sandbox)
     system.vision = sim.vision
     for name, location in sim.taught_locations().items():
         system.define_location(name, location)
-    names = system.load(program)
-    if not names:
-        raise ProgramError(f"{program}: no .PROGRAM in file", file=str(program))
+    names = system.load_files(programs)
+    if not names and main is None:
+        raise ProgramError(f"{programs[0]}: no .PROGRAM in file", file=str(programs[0]))
     sim.scheduler.add(system.start(main or names[0]))
     return system
 
@@ -81,8 +83,19 @@ def _start_gpl(sim: Simulation, project: Path, main: str | None, console: Consol
     return system
 
 
+@dataclass
+class StartedRun:
+    """A cell with its program loaded and started, not yet simulated."""
+
+    program: Path
+    scene: Path
+    simulation: Simulation
+    system: VPlusSystem | GplSystem
+    report_path: str | Path | None
+
+
 def run_program(
-    program: str | Path,
+    program: str | Path | list[str | Path],
     scene: str | Path | None = None,
     main: str | None = None,
     report_path: str | Path | None = None,
@@ -92,31 +105,51 @@ def run_program(
     console: Console | None = None,
 ) -> RunResult:
     """Load the cell, load and start the program (a V+ file or a GPL project
-    folder), simulate, report."""
-    program = Path(program)
-    if not program.exists():
-        raise ProgramError(f"*Nonexistent file* {program}", file=str(program))
-    scene = Path(scene) if scene is not None else DEFAULT_SCENE
+    folder, or several V+ files loaded together), simulate, report."""
+    started = start_program(program, scene, main, report_path, rrd_path, seed, console)
+    return finish_run(started, started.simulation.run(max_sim_time=max_sim_time))
+
+
+def start_program(program: str | Path | list[str | Path], scene: str | Path | None = None, main: str | None = None,
+                  report_path: str | Path | None = None, rrd_path: str | Path | None = None,
+                  seed: int | None = None, console: Console | None = None, recorder=None) -> StartedRun:
+    """Load the cell and the program and start it (`recorder`: one already made, as
+    `twin serve` makes for a live viewer)."""
+    # as given, else the bundled file of that name; several V+ files are loaded together
+    programs = [find_user_file(p) for p in ([program] if isinstance(program, (str, Path)) else program)]
+    program = programs[0]
+    for path in programs:
+        if not path.exists():
+            raise ProgramError(f"*Nonexistent file* {path}", file=str(path))
+    if program.is_dir() and len(programs) > 1:
+        raise ProgramError(f"{program}: a GPL project folder is run alone", file=str(program))
+    scene = find_user_file(scene) if scene is not None else DEFAULT_SCENE
     if not scene.exists():
         raise ProgramError(f"{scene}: no such scene file", file=str(scene))
 
     sim = Simulation(scene, seed=seed)
-    sim.recorder = _open_recorder(sim, rrd_path)
+    sim.recorder = recorder(sim) if recorder is not None else _open_recorder(sim, rrd_path)
     if sim.vision is not None:
         sim.vision.recorder = sim.recorder
     sandbox = _sandbox(program, report_path or rrd_path)
     if program.is_dir():
         system = _start_gpl(sim, program, main, console, sandbox)
     else:
-        system = _start_vplus(sim, program, main, console, sandbox)
+        system = _start_vplus(sim, programs, main, console, sandbox)
 
     if sim.recorder is not None:
         sim.recorder.log_text(0.0, f"twin run {program} on {scene}")
-    try:
-        outcome = sim.run(max_sim_time=max_sim_time)
-    finally:
-        if sim.vision is not None:
-            sim.vision.close()
+    return StartedRun(program, scene, sim, system, report_path)
+
+
+def finish_run(started: StartedRun, outcome) -> RunResult:
+    """Close the recording, build the report (and write it when asked)."""
+    sim, system, program, scene, report_path = (started.simulation, started.system, started.program,
+                                                started.scene, started.report_path)
+    if isinstance(system, VPlusSystem):
+        system.devices.close_network()  # a run stopped early still frees its ports
+    if sim.vision is not None:
+        sim.vision.close()  # its port and renderers
     if sim.recorder is not None:
         sim.recorder.log_text(sim.cell.time, system.console.output or "(no output)")
         sim.recorder.close()

@@ -12,6 +12,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Callable
 
 from .controller.controller import COLLISION, MotionSettings, VirtualController
 from .controller.io import DigitalIO
@@ -19,11 +20,11 @@ from .controller.location import Location
 from .controller.scheduler import Scheduler
 from .errors import ProgramError
 from .physics.cell import Cell
+from .resources import bundled
 from .vision.server import VisionServer
 
 MAJOR_CYCLE_S = 0.016
-REPO_ROOT = Path(__file__).resolve().parent.parent
-DEFAULT_SCENE = REPO_ROOT / "scenes" / "scara_pick.toml"
+DEFAULT_SCENE = bundled("scenes/scara_pick.toml")
 
 
 @dataclass
@@ -62,8 +63,9 @@ class Simulation:
     def clock(self) -> float:
         return self.cell.time
 
-    def run(self, max_sim_time: float = 3600.0) -> RunOutcome:
-        """Run until every task has ended and the cell has settled."""
+    def run(self, max_sim_time: float = 3600.0, on_cycle: Callable[[], bool] | None = None) -> RunOutcome:
+        """Run until every task has ended and the cell has settled, or until `on_cycle`,
+        called after every major cycle (`twin serve` paces and stops with it), says stop."""
         wall_start = time.perf_counter()
         cell, controller, scheduler = self.cell, self.controller, self.scheduler
         steps = max(1, round(MAJOR_CYCLE_S / cell.timestep))
@@ -98,7 +100,13 @@ class Simulation:
                 error = self._stop_for_collision(collisions[0])
                 if error is not None:  # no program was running to take it
                     errors.append(error.as_dict(cell.time))
+            fault = controller.take_fault()  # the robot stopped by itself (a belt window violation)
+            if fault is not None and self._give_to_tasks(fault) is not None:
+                errors.append(fault.as_dict(cell.time))
             self._record()
+            if on_cycle is not None and on_cycle():
+                program_end = program_end if program_end is not None else cell.time
+                break
         return RunOutcome(cell.time, time.perf_counter() - wall_start, program_end, errors)
 
     def _record(self) -> None:
@@ -127,13 +135,18 @@ class Simulation:
         turn errors into its own report)."""
         self.controller.halt()
         text = f"*Collision detected* {collision['robot_geom']} with {collision['with']}"
+        return self._give_to_tasks(ProgramError(text, COLLISION))
+
+    def _give_to_tasks(self, error: ProgramError) -> ProgramError | None:
+        """Each running program stops with `error` at the step it is executing; returns the
+        error when no program took it."""
         taken = False
         for task in [task for task in self.scheduler.tasks if not task.finished]:
             try:
-                task.generator.throw(ProgramError(text, COLLISION))  # one each: it gets located
+                task.generator.throw(ProgramError(error.message, error.code))  # one each: it gets located
                 taken = True
             except StopIteration:
                 taken = True
             except ProgramError:
                 task.finished = True
-        return None if taken else ProgramError(text, COLLISION)
+        return None if taken else error

@@ -20,11 +20,14 @@ import dataclasses
 
 from . import ast
 from . import messages as msg
-from .keywords import INSTRUCTIONS, NAME_ARGUMENTS, WRITES_FIRST_ARGUMENT, arity
+from .keywords import INSTRUCTIONS, NAME_ARGUMENTS, WRITES_FIRST_ARGUMENT, argument_check, arity
 
 FORMAT_ARGUMENTS = {"$ENCODE"}  # arguments are TYPE items: expressions and /I0, /F8.3 ...
 ARRAY_ARGUMENTS = {"$UNPACK", "SOLVE.FLAGS"}  # the first argument a[i] (a[]) is passed as (array, index)
 FORMAT_CODES = set("SCXBUNDFEGHOI")  # formats.py renders each of them
+# Field widths and repeat counts (/I10, /C2, /X40) at most this: wider than any terminal
+# line or record (the guides set no number; a larger one is a load-time *Syntax error*).
+MAX_FORMAT_WIDTH = 255
 LIBRARY_CALLS = WRITES_FIRST_ARGUMENT | NAME_ARGUMENTS | FORMAT_ARGUMENTS | ARRAY_ARGUMENTS
 
 
@@ -50,6 +53,9 @@ class LibraryStatements:
         unit_var = s.unit[0] if s.unit and isinstance(s.unit[0], ast.Var) else None
         if spec.returns_unit and unit_var is not None:
             unit[0] = self.peek(unit_var)
+        handle_var = s.unit[1] if spec.writes_back and len(s.unit) > 1 and isinstance(s.unit[1], ast.Var) else None
+        if handle_var is not None:
+            unit[1] = self.peek(handle_var)
         if spec.targets:
             if not all(isinstance(item, ast.Var) for item in s.items):
                 raise self.error(s, msg.INVALID_ARGUMENT, f"{s.name} needs variables")
@@ -63,6 +69,9 @@ class LibraryStatements:
             for i, item in enumerate(s.items):
                 self.emit(depth, f"if {result}[{i}] is not None:")
                 self.assign(item, f"{result}[{i}]", depth + 1)
+        if handle_var is not None:
+            self.emit(depth, f"if {result}[-1] is not None:")
+            self.assign(handle_var, f"{result}[-1]", depth + 1)
         if spec.returns_unit and unit_var is not None:
             self.emit(depth, f"if {result} is not None:")
             self.assign(unit_var, result, depth + 1)
@@ -72,6 +81,8 @@ class LibraryStatements:
         if isinstance(item, ast.Format):
             if item.code not in FORMAT_CODES:
                 raise self.error(self.current, msg.SYNTAX_ERROR, f"unknown format /{item.code}")
+            if max(item.width or 0, item.decimals or 0) > MAX_FORMAT_WIDTH:
+                raise self.error(self.current, msg.SYNTAX_ERROR, f"format width above {MAX_FORMAT_WIDTH}")
             return f"_fmt({item.code!r}, {item.width!r}, {item.decimals!r})"
         return self.expr(item)
 
@@ -88,8 +99,10 @@ class LibraryStatements:
                 if not isinstance(v, ast.Var) or v.indices is None:
                     raise self.error(s, msg.INVALID_ARGUMENT, f"{s.name} needs an array")
                 passed.append(self.array_ref(v))
+            elif i in spec.name_values and isinstance(v, ast.Var) and v.indices is None:
+                passed.append(repr(v.name))
             else:
-                passed.append(self.expr(v))
+                passed.append(self.checked(v, argument_check(spec.function, i), s.name))
         writes = []  # (position, variable) of the plain variables the instruction sets
         for i, a in enumerate(s.args):
             if a is None:
@@ -102,7 +115,7 @@ class LibraryStatements:
                 passed.append(self.peek(a))
                 writes.append((i, a))
             else:
-                passed.append(self.expr(a))
+                passed.append(self.checked(a, argument_check(spec.function, len(passed)), s.name))
         call = f"I[{s.name!r}](rt{''.join(', ' + a for a in passed)})"
         if not writes:
             self.emit(depth, call)

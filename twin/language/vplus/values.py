@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import struct
 
+from ...controller.belt import BeltFrame, BeltLocation
 from ...controller.location import Location
 from ...errors import ProgramError
 from . import messages as msg
@@ -89,9 +90,21 @@ def _str(value) -> str:
 
 
 def _real(value) -> float:
-    if isinstance(value, (str, Location)) or value is None:
-        raise fail(msg.WRONG_TYPE, "real value expected")
-    return float(value)
+    """A real argument or value: a string, location, precision point or array is
+    *Wrong data type*."""
+    if isinstance(value, float):
+        return value
+    if isinstance(value, int):
+        return float(value)
+    raise fail(msg.WRONG_TYPE, "real value expected")
+
+
+def _double(value) -> float:
+    """Store into a DOUBLE variable: a real within the double range."""
+    value = _real(value)
+    if not math.isfinite(value):
+        raise fail(msg.OVERFLOW, "beyond the range of a DOUBLE")
+    return value
 
 
 def single(value: float) -> float:
@@ -103,7 +116,10 @@ def single(value: float) -> float:
 def _single(value) -> float:
     """Store into a real variable: a real, rounded to single precision."""
     try:
-        return _SINGLE.unpack(_SINGLE.pack(value))[0]
+        stored = _SINGLE.unpack(_SINGLE.pack(value))[0]
+        if stored - stored != 0.0:  # an infinity or NaN from 64-bit arithmetic inside the expression
+            raise OverflowError
+        return stored
     except OverflowError:
         raise fail(msg.OVERFLOW, f"{value:g} is beyond single precision") from None
     except struct.error:
@@ -123,7 +139,17 @@ def _argument(value, kind: str, name: str):
 
 
 def _location(value) -> Location:
+    """A transformation; a belt location (%belt:loc) is where its belt has it now."""
+    if isinstance(value, BeltLocation):
+        return value.instantaneous()
     if not isinstance(value, Location):
+        raise fail(msg.WRONG_TYPE, "location expected")
+    return value
+
+
+def _point(value):
+    """Where a motion may go: a transformation, a precision point or a belt location."""
+    if not isinstance(value, (Location, tuple, BeltLocation)):
         raise fail(msg.WRONG_TYPE, "location expected")
     return value
 
@@ -135,7 +161,33 @@ def _precision_point(value) -> tuple:
     return value
 
 
-def _compound(a, b) -> Location:
+def _turn(angle: float) -> float:
+    """An angle in (-180, 180]."""
+    angle = math.fmod(angle, 360.0)
+    return angle - 360.0 if angle > 180.0 else angle + 360.0 if angle <= -180.0 else angle + 0.0
+
+
+def components(loc: Location) -> tuple[float, ...]:
+    """x, y, z, yaw, pitch, roll as V+ shows them: every angle within +-180 and pitch signed,
+    "a positive rotation of 190 degrees is shown as -170" ([000] L6018-6019, [001] L2216).
+    Of the two equal triples (y, p, r) and (y + 180, -p, r + 180) the one with yaw in
+    (-90, 90] is shown; pitch 0 or 180 keeps yaw 0 (the SCARA form: the tool straight down
+    has pitch 180 and its turn in roll)."""
+    x, y, z, yaw, pitch, roll = loc.components()
+    if pitch not in (0.0, 180.0) and not -90.0 < yaw <= 90.0:
+        yaw, pitch, roll = _turn(yaw + 180.0), -pitch, _turn(roll + 180.0)
+    return x, y, z, yaw, pitch, roll
+
+
+def _compound(a, b) -> Location | BeltLocation:
+    """a:b.  A belt variable may only be the leftmost element: %belt:loc is a location
+    fixed to the belt (eV+ guide, "Belt-Relative Motion Instructions")."""
+    if isinstance(b, (BeltFrame, BeltLocation)):
+        raise fail(msg.ILLEGAL_OPERATION, "a belt variable must be the leftmost element of a compound location")
+    if isinstance(a, BeltFrame):
+        return BeltLocation(a, _location(b))
+    if isinstance(a, BeltLocation):
+        return a * _location(b)
     return _location(a) * _location(b)
 
 

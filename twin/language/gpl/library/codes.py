@@ -8,6 +8,7 @@ controller's style, most of them from -3100 down.  docs/gpl.md lists them all.
 
 from __future__ import annotations
 
+from ....controller.controller import BELT_JOINT_MOTION, BELT_WINDOW_VIOLATION
 from ....controller.controller import NULLING_TIMEOUT as VPLUS_NULLING_TIMEOUT
 from ....controller.kinematics import JOINT_LIMIT, LOCATION_OUT_OF_RANGE as VPLUS_OUT_OF_RANGE
 from ....controller.kinematics import STRAIGHT_LINE_CONFIG
@@ -18,6 +19,8 @@ from . import shared
 DEVICE_FULL = (-323, "Device full")  # manual L2992
 XML_ERROR = (-799, "XML error")  # manual L3725
 NO_XML_NODE = (-801, "No XML node")  # manual L3731
+UNDEFINED_DATAID = (-501, "Undefined DataID")  # PreciseFlex (parameter database range), unverified
+READ_ONLY_DATAID = (-502, "DataID is read-only")  # PreciseFlex (parameter database range), unverified
 INVALID_ROBOT = (-1000, "Invalid robot number")  # PreciseFlex
 ROBOT_ALREADY_ATTACHED = (-1006, "Robot already attached")  # PreciseFlex
 NO_ROBOT_ATTACHED = (-1009, "No robot attached")  # PreciseFlex
@@ -41,6 +44,8 @@ SOCKET_TIMEOUT = (-3121, "Socket timeout")  # twin
 MODBUS_EXCEPTION = (-3130, "Modbus exception response")  # twin
 MODBUS_TIMEOUT = (-3131, "Modbus timeout")  # twin
 THREAD_ERROR = (-3140, "Invalid thread operation")  # twin
+CONVEYOR_LIMIT = (-3150, "Conveyor location outside the conveyor limits")  # twin
+CONVEYOR_JOINT_MOTION = (-3151, "Joint-interpolated motion to or from a conveyor")  # twin
 
 # Errors the shared controller raises with V+ codes, as GPL reports them.
 _FROM_VPLUS = {
@@ -48,6 +53,8 @@ _FROM_VPLUS = {
     JOINT_LIMIT: JOINT_OUT_OF_RANGE,
     STRAIGHT_LINE_CONFIG: STRAIGHT_CONFIG,
     VPLUS_NULLING_TIMEOUT: NULLING_TIMEOUT,
+    BELT_WINDOW_VIOLATION: CONVEYOR_LIMIT,
+    BELT_JOINT_MOTION: CONVEYOR_JOINT_MOTION,
 }
 
 

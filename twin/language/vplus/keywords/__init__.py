@@ -36,7 +36,53 @@ class InstructionSpec:
     # positions are arrays, passed as (array, index), and the plain variables before "="
     # get what the instruction returns at their position (a tuple, None: unchanged).
     array_values: tuple[int, ...] = ()
+    # Keyed: the plain variables among the arguments get what the instruction returns at
+    # their position.  I/O (READ (lun, handle)): a variable second unit argument gets the
+    # last value the instruction returns (None: unchanged).
     writes_back: bool = False
+    # WINDOW %b = a, b, program: the values after "=" at these positions are names.
+    name_values: tuple[int, ...] = ()
+
+
+# Argument kinds.  A keyword's parameter is a real unless its annotation says otherwise;
+# the compiler checks every argument against its parameter's kind, as the controller's
+# keyword table does: a string or a location where a number belongs is *Wrong data type*
+# (at load time when the argument is a string constant or a $ expression), never a Python
+# error from inside the library.
+class Loc:
+    """A transformation."""
+
+
+class Point:
+    """A transformation or a precision point (#p): where a motion may go."""
+
+
+class Str:
+    """A string."""
+
+
+class Any:
+    """Anything: the keyword checks it itself (an array, a value of either kind)."""
+
+
+# kind name (as written in an annotation) -> the check the generated code applies
+# (runtime.values), None: none
+_CHECKS = {"Loc": "_location", "Point": "_point", "Str": "_str", "Any": None, "float": "_real"}
+
+
+def argument_check(fn: Callable, position: int) -> str | None:
+    """The check for argument `position` (0 is the first after rt): "_real" unless the
+    parameter is annotated with another kind."""
+    params = [p for p in list(inspect.signature(fn).parameters.values())[1:] if p.kind is not p.KEYWORD_ONLY]
+    if not params:
+        return None
+    param = params[min(position, len(params) - 1)]
+    if position >= len(params) and param.kind is not param.VAR_POSITIONAL:
+        return None  # too many arguments: argument_count reports it
+    annotation = param.annotation
+    if annotation is param.empty:
+        return "_real"
+    return _CHECKS.get(annotation if isinstance(annotation, str) else annotation.__name__)
 
 
 INSTRUCTIONS: dict[str, InstructionSpec] = {}
@@ -78,10 +124,11 @@ def arity(fn: Callable) -> tuple[int, float]:
 
 
 def instruction(name: str, waits: bool = False, names: bool = False, targets: bool = False,
-                returns_unit: bool = False, array_values: tuple[int, ...] = (), writes_back: bool = False):
+                returns_unit: bool = False, array_values: tuple[int, ...] = (), writes_back: bool = False,
+                name_values: tuple[int, ...] = ()):
     def register(function):
         INSTRUCTIONS[name] = InstructionSpec(function, waits, names, targets, returns_unit,
-                                             array_values, writes_back)
+                                             array_values, writes_back, name_values)
         return function
 
     return register
@@ -100,4 +147,4 @@ def function(name: str, writes_first: bool = False, names: bool = False):
 
 
 # The domain modules register themselves on import (after the registry exists).
-from . import files, locations, motion, numbers, program, solve, strings, system, vision  # noqa: E402,F401
+from . import belts, files, locations, motion, numbers, program, solve, strings, system, vision  # noqa: E402,F401

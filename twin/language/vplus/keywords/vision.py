@@ -23,7 +23,7 @@ from ....controller.location import trans
 from ....errors import ProgramError
 from .. import messages as msg
 from ..values import fail, to_int
-from . import function, instruction
+from . import Str, function, instruction
 
 # VRESULT result numbers (the Locator's, as in the guides: count, X, Y, rotation; the
 # others twin-chosen), and what each reads from an instance.
@@ -52,6 +52,8 @@ def _vision_error(err) -> ProgramError:
 
 
 def _address(ip) -> None:
+    """The address in VWAITI's and VPARAMETER's items (the functions' is checked by the
+    compiler: its parameter is a Str)."""
     if not isinstance(ip, str):
         raise fail(msg.WRONG_TYPE, "the vision server's IP address is a string")
 
@@ -75,12 +77,11 @@ def _run(rt, sequence):
 
 
 @instruction("VRUN")
-def _vrun(rt, ip, sequence=None):
+def _vrun(rt, ip: Str, sequence=None):
     """Start a sequence: the picture is taken now, the results are ready after the
     modelled processing time (VWAITI waits for them)."""
     from ....vision.server import VisionError
 
-    _address(ip)
     try:
         _server(rt).run(_one(sequence))
     except VisionError as err:
@@ -103,9 +104,8 @@ def _vwaiti(rt, unit: tuple, items: tuple):
 
 
 @function("VSTATE")
-def _vstate(rt, ip, sequence=None):
+def _vstate(rt, ip: Str, sequence=None):
     """0 never run, 1 running, 2 done with an error, 3 done."""
-    _address(ip)
     server = _server(rt)
     from ....vision.server import VisionError
 
@@ -141,8 +141,7 @@ def _instance(rt, sequence, tool, instance):
 
 
 @function("VRESULT")
-def _vresult(rt, ip, sequence=None, tool=None, instance=None, result=None, index=None, frame=None):
-    _address(ip)
+def _vresult(rt, ip: Str, sequence=None, tool=None, instance=None, result=None, index=None, frame=None):
     rid = to_int(result) if result is not None else INSTANCE_COUNT
     if rid == INSTANCE_COUNT:
         server, run, instances = _instances(rt, sequence, tool)
@@ -158,8 +157,7 @@ def _vresult(rt, ip, sequence=None, tool=None, instance=None, result=None, index
 
 
 @function("VLOCATION")
-def _vlocation(rt, ip, sequence=None, tool=None, instance=None, result=None, index=None, frame=None):
-    _address(ip)
+def _vlocation(rt, ip: Str, sequence=None, tool=None, instance=None, result=None, index=None, frame=None):
     if result is not None and to_int(result) != LOCATION:
         raise fail(msg.INVALID_ARGUMENT, f"VLOCATION result {to_int(result)} (only {LOCATION}, the location)")
     inst = _instance(rt, sequence, tool, instance)
@@ -188,8 +186,7 @@ def _parameter_name(parameter) -> str:
 
 
 @function("VPARAMETER")
-def _vparameter(rt, ip, sequence=None, tool=None, parameter=None, index=None, obj=None):
-    _address(ip)
+def _vparameter(rt, ip: Str, sequence=None, tool=None, parameter=None, index=None, obj=None):
     t = _tool(rt, sequence, tool)
     name = _parameter_name(parameter)
     params = t.parameters()
