@@ -77,7 +77,7 @@ def _calibrate(args: argparse.Namespace) -> int:
 
     try:
         done = calibrate_scene(args.scene, args.camera)
-    except (ValueError, OSError) as err:
+    except (ValueError, OSError, ProgramError) as err:
         print(f"twin calibrate: {err}", file=sys.stderr)
         return 2
     for config, model, path in done:

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from .components.base import CellContext, Component
 from .geometry import MM, matrix_to_quat, vplus_to_matrix
 
 # Optical frame (OpenCV) -> MuJoCo camera frame: 180 degrees about x.
@@ -171,13 +172,24 @@ def add_camera(spec: mujoco.MjSpec, config: CameraConfig) -> None:
     vis.offheight = max(vis.offheight, config.height)
 
 
-def cameras_of(scene: dict) -> list[CameraConfig]:
-    """The ``[[camera]]`` tables of a parsed cell file."""
-    tables = scene.get("camera", [])
-    if isinstance(tables, dict):
-        tables = [tables]
-    configs = [CameraConfig.from_table(t) for t in tables]
-    names = [c.name for c in configs]
-    if len(set(names)) != len(names):
-        raise ValueError(f"two cameras share a name: {names}")
-    return configs
+# ---------------------------------------------------------------------- the component
+# The cell file's tables are validated with the rest of the scene (schema.py: CameraSection).
+
+
+class Camera(Component):
+    """A camera of the cell: its model camera, light and calibration targets."""
+
+    section = "camera"
+
+    def __init__(self, config, ctx: CellContext):
+        """`config`: the scene's validated CameraSection."""
+        super().__init__(config, ctx)
+        self.camera = CameraConfig.from_table(config.model_dump(exclude_none=True))
+
+    def build(self, spec: mujoco.MjSpec, ctx: CellContext) -> None:
+        add_camera(spec, self.camera)
+
+
+def cameras_of(cell) -> list[CameraConfig]:
+    """The cameras of a built cell."""
+    return [c.camera for c in cell.ctx.by_kind.get("camera", {}).values()]

@@ -16,7 +16,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from ..physics.camera import PARKED, CameraConfig, target_body
+from ..physics.camera import PARKED, CameraConfig, cameras_of, target_body
 from ..physics.geometry import MM
 from .calibration import CameraModel, find_target, solve
 from .camera import Camera
@@ -69,7 +69,7 @@ def calibrate_scene(scene_path: str | Path, camera: str | None = None) -> list[t
 
     cell = Cell.from_scene(scene_path)
     done = []
-    for config in cell.cameras:
+    for config in cameras_of(cell):
         if config.calibration is None or (camera is not None and config.name != camera):
             continue
         model, _ = calibrate(cell.model, cell.data, config, cell.robot_base_pose())

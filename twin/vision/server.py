@@ -29,7 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..physics.camera import CameraConfig
+from ..errors import SceneError
+from ..physics.camera import CameraConfig, cameras_of
 from .calibration import CameraModel
 from .camera import Camera, Image
 from .locators import Instance
@@ -108,12 +109,15 @@ class VisionServer:
         camera's calibration is read from its plan's file when the file exists."""
         if "vision" not in scene:
             return None
-        processes, time_s = processes_of(scene)
-        configs: dict[str, CameraConfig] = {c.name: c for c in cell.cameras}
-        for p in processes:
-            if p.camera not in configs:
-                raise ValueError(f"vision process {p.name!r}: no camera {p.camera!r} "
-                                 f"(cameras: {', '.join(configs) or 'none'})")
+        configs: dict[str, CameraConfig] = {c.name: c for c in cameras_of(cell)}
+        try:
+            processes, time_s = processes_of(scene)
+            for p in processes:
+                if p.camera not in configs:
+                    raise ValueError(f"vision process {p.name!r}: no camera {p.camera!r} "
+                                     f"(cameras: {', '.join(configs) or 'none'})")
+        except ValueError as err:
+            raise SceneError(f"{scene_path}: {err}") from None
         calibrations = {}
         for name, config in configs.items():
             path = None if config.calibration is None else Path(scene_path).parent / config.calibration.file
@@ -163,12 +167,11 @@ class VisionServer:
         self._told[key] = self._told.get(key, True) and inst.passed is not False
 
     def report_counts(self) -> dict[str, int]:
-        """For the report: instances the programs were given that passed (located) or
-        failed an inspection (rejected), and runs in which they were told nothing was
-        found (not_found); docs/vision.md."""
+        """For the report's counts: instances the programs were given that passed
+        (located) or failed an inspection (rejected), and runs in which they were told
+        nothing was found (not_found); docs/vision.md."""
         passed = sum(self._told.values())
-        return {"located": passed, "rejected": len(self._told) - passed, "not_found": len(self._not_found),
-                "pictures": len(self.runs)}
+        return {"located": passed, "rejected": len(self._told) - passed, "not_found": len(self._not_found)}
 
     def last_run(self, process: Process) -> Run | None:
         for run in reversed(self.runs):
