@@ -939,7 +939,7 @@ class ProgramCompiler(LibraryStatements):
         else:  # DURATION 0.5 ALWAYS, ACCEL (1) 50, 50
             args = ", ".join(([self.checked_arguments(name, spec.function, s.args)] if s.args else [])
                              + (["always=True"] if s.always else [])
-                             + ([self.parenthesised(s, spec.function)] if s.profile is not None else []))
+                             + ([self.parenthesised(s, spec.function)] if s.parenthesised is not None else []))
         call = f"I[{name!r}](rt{', ' if args else ''}{args})"
         self.emit(depth, f"yield from {call}" if spec.waits else call)
 
@@ -951,7 +951,7 @@ class ProgramCompiler(LibraryStatements):
                  if p.kind is p.KEYWORD_ONLY and p.name != "always"]
         if not names:
             raise self.error(s, msg.SYNTAX_ERROR, f"{s.name} takes no parenthesised argument")
-        return f"{names[0]}={self.checked(s.profile, '_real', s.name)}"
+        return f"{names[0]}={self.checked(s.parenthesised, '_real', s.name)}"
 
     def keyword(self, s: ast.Instruction) -> str:
         """An instruction's full name.  Like the V+ editor, which expands
