@@ -18,7 +18,7 @@ from twin.language.gpl.library import CLASSES, member
 from twin.runner import run_program
 
 from conftest import SCARA_SCENE as SCENE
-from gpl_helpers import error_of, output_of, run_project
+from gpl_helpers import output_of, run_project
 
 # One object of each built-in class that has objects (the sweep calls their members).
 OBJECTS = {
