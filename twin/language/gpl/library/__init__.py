@@ -108,4 +108,4 @@ def member(cls: type, name: str) -> str | None:
 
 
 # The classes register themselves on import.
-from . import console, conveyor, files, locations, modbus, motion, net, robot, signal, thread, xmldoc  # noqa: E402,F401
+from . import console, conveyor, files, locations, modbus, motion, net, robot, signal, thread, vision, xmldoc  # noqa: E402,F401
