@@ -17,8 +17,11 @@ Layout (``Report.to_json``)::
       "parts": [ {"id": 0, "pose": [x, y, z, qw, qx, qy, qz], "region": "bin", "dropped": false} ],
       "regions": {"bin": 100, "nest": 0},
       "events": [ {"time": 12.5, "kind": "drop", ...free fields...} ],
-      "cycle_times_s": [0.61, 0.58]
+      "cycle_times_s": [0.61, 0.58],
+      "interrupted": false              # true when Ctrl-C / SIGTERM stopped the run early
     }
+
+The JSON Schema of this layout is twin/schemas/report.schema.json (docs/ci.md).
 
 Units: part positions in millimetres (as the controller reports them), orientation
 as a unit quaternion in MuJoCo's order (w, x, y, z); times in seconds of simulated
@@ -52,7 +55,11 @@ from typing import Any
 
 FORMAT_VERSION = 1
 
-__all__ = ["Report", "ReportError", "count_regions", "FORMAT_VERSION"]
+__all__ = ["Report", "ReportError", "count_regions", "EVENT_KINDS", "FORMAT_VERSION"]
+
+# Every kind of cell event a run reports (twin.physics.cell); `twin check` rejects any other
+# name, and tests/test_ci_tooling.py keeps this list and the cell in step.
+EVENT_KINDS = ("present", "grasp", "release", "slip", "overload", "dropped", "collision", "feeder_empty")
 
 
 class ReportError(Exception):
@@ -85,6 +92,7 @@ class Report:
     regions: dict[str, int] | None = None
     events: list[dict] = field(default_factory=list)
     cycle_times_s: list[float] = field(default_factory=list)
+    interrupted: bool = False
 
     def __post_init__(self) -> None:
         _validate(self)
@@ -222,6 +230,7 @@ def _validate(r: Report) -> None:
         need(ev.get("time") is None or _is_num(ev.get("time")), f"events[{i}].time must be a number or null")
     need(isinstance(r.cycle_times_s, list) and all(_is_num(v) for v in r.cycle_times_s),
          "cycle_times_s must be a list of numbers")
+    need(isinstance(r.interrupted, bool), "interrupted must be true or false")
 
 
 def _first_non_finite(obj: Any, where: str = "") -> str:

@@ -10,8 +10,11 @@ Python or a notebook:
 
 from __future__ import annotations
 
+import signal
 import tempfile
+import threading
 import uuid
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -80,36 +83,45 @@ def _start_gpl(sim: Simulation, project: Path, main: str | None, console: Consol
     return system
 
 
-def run_program(
-    program: str | Path,
-    scene: str | Path | None = None,
-    main: str | None = None,
-    report_path: str | Path | None = None,
-    rrd_path: str | Path | None = None,
-    max_sim_time: float = 3600.0,
-    seed: int | None = None,
-    console: Console | None = None,
-) -> RunResult:
-    """Load the cell, load and start the program (a V+ file or a GPL project
-    folder), simulate, report."""
-    program = find_user_file(program)   # as given, else the bundled file of that name
-    if not program.exists():
-        raise ProgramError(f"*Nonexistent file* {program}", file=str(program))
-    scene = find_user_file(scene) if scene is not None else DEFAULT_SCENE
-    if not scene.exists():
-        raise ProgramError(f"{scene}: no such scene file", file=str(scene))
+@contextmanager
+def _stop_on_signals(enabled: bool):
+    """SIGINT and SIGTERM set the yielded event (the run stops at its next cycle); a second
+    one raises KeyboardInterrupt."""
+    stop = threading.Event()
+    if not enabled or threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
 
-    sim = Simulation(scene, seed=seed)
-    sim.recorder = _open_recorder(sim, rrd_path)
-    sandbox = _sandbox(program, report_path or rrd_path)
-    if program.is_dir():
-        system = _start_gpl(sim, program, main, console, sandbox)
-    else:
-        system = _start_vplus(sim, program, main, console, sandbox)
+    def handler(signum, frame):
+        if stop.is_set():
+            raise KeyboardInterrupt
+        stop.set()
 
-    if sim.recorder is not None:
-        sim.recorder.log_text(0.0, f"twin run {program} on {scene}")
-    outcome = sim.run(max_sim_time=max_sim_time)
+    previous = {sig: signal.signal(sig, handler) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield stop
+    finally:
+        for sig, old in previous.items():
+            signal.signal(sig, old)
+
+
+@contextmanager
+def _progress(sim: Simulation, enabled: bool):
+    if not enabled:
+        yield None
+        return
+    from .progress import Progress
+
+    line = Progress(sim)
+    try:
+        yield line
+    finally:
+        line.close()
+
+
+def _finish(sim: Simulation, system, program: Path, scene: Path, report_path: str | Path | None) -> Report:
+    """Close the recording and write the report (also after an interrupted run)."""
+    outcome = sim.outcome()
     if sim.recorder is not None:
         sim.recorder.log_text(sim.cell.time, system.console.output or "(no output)")
         sim.recorder.close()
@@ -120,7 +132,54 @@ def run_program(
         sim_time_s=round(outcome.sim_time_s, 6), wall_time_s=round(outcome.wall_time_s, 3),
         output=system.console.output, errors=outcome.errors, parts=sim.cell.parts_report(),
         regions=sim.cell.region_counts(), events=events, cycle_times_s=cycle_times(events),
+        interrupted=sim.interrupted,
     )
     if report_path is not None:
         report.write(report_path)
+    return report
+
+
+def run_program(
+    program: str | Path,
+    scene: str | Path | None = None,
+    main: str | None = None,
+    report_path: str | Path | None = None,
+    rrd_path: str | Path | None = None,
+    max_sim_time: float = 3600.0,
+    seed: int | None = None,
+    console: Console | None = None,
+    progress: bool = False,
+    handle_signals: bool = False,
+) -> RunResult:
+    """Load the cell, load and start the program (a V+ file or a GPL project
+    folder), simulate, report.
+
+    `progress`: a progress line on standard error once the run lasts a few seconds.
+    `handle_signals`: Ctrl-C (SIGINT) and SIGTERM stop the run at the next major cycle;
+    the report (marked interrupted) and the recording are still written (a second Ctrl-C
+    stops at once).  Only from the main thread; `twin run` sets both."""
+    program = find_user_file(program)   # as given, else the bundled file of that name
+    if not program.exists():
+        raise ProgramError(f"*Nonexistent file* {program}", file=str(program))
+    scene = find_user_file(scene) if scene is not None else DEFAULT_SCENE
+    if not scene.exists():
+        raise ProgramError(f"{scene}: no such scene file", file=str(scene))
+
+    # From the start: a signal while the cell loads stops the run before its first cycle.
+    with _stop_on_signals(handle_signals) as stop:   # also while the recording and report are written
+        sim = Simulation(scene, seed=seed)
+        sim.stop = stop
+        sim.recorder = _open_recorder(sim, rrd_path)
+        sandbox = _sandbox(program, report_path or rrd_path)
+        if program.is_dir():
+            system = _start_gpl(sim, program, main, console, sandbox)
+        else:
+            system = _start_vplus(sim, program, main, console, sandbox)
+
+        if sim.recorder is not None:
+            sim.recorder.log_text(0.0, f"twin run {program} on {scene}")
+        sim.begin(max_sim_time)
+        with _progress(sim, progress) as on_cycle:
+            sim.advance(on_cycle=on_cycle)
+        report = _finish(sim, system, program, scene, report_path)
     return RunResult(report, sim)
