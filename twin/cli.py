@@ -4,6 +4,7 @@
                      [--max-sim-time S] [--seed N] [--expect EXPECT.toml [--junit FILE.xml]]
                      [--seeds N]
     twin check REPORT --expect EXPECT.toml [--junit FILE.xml]
+    twin serve PROGRAM|PROJECT_DIR [--scene SCENE] [--fast] [--viewer] [--report R.json] ...
 
 A user's mistake (bad syntax, an unreachable location, a missing file) is
 printed as the controller would print it, with file and line, and never as a
@@ -133,6 +134,22 @@ def _run_seeds(args: argparse.Namespace, expect: dict | None) -> int:
     return 1 if any(o.failures for o in outcomes) else 0
 
 
+def _serve(args: argparse.Namespace) -> int:
+    """Keep the cell running for client software (twin/serve.py)."""
+    from .serve import serve_program
+
+    try:
+        result = serve_program(args.program, scene=args.scene, main=args.main, report_path=args.report,
+                               rrd_path=args.rrd, viewer=args.viewer, fast=args.fast, speed=args.speed,
+                               seed=args.seed, max_sim_time=args.max_sim_time)
+    except ProgramError as err:
+        print(str(err), file=sys.stderr)
+        return 2 if err.code is None else 1
+    for error in result.report.errors:
+        print(ProgramError.from_dict(error), file=sys.stderr)
+    return 1 if result.report.errors else 0
+
+
 def _check(args: argparse.Namespace) -> int:
     from .check import main_check
 
@@ -157,6 +174,20 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--seed", type=int, default=None, help="random seed (default: the scene's)")
     _add_run_options(run)
     run.set_defaults(handler=_run)
+
+    serve = sub.add_parser("serve", help="keep a server program (V+ TCP server, GPL TCP Command Server) "
+                           "running on its cell for client software, in real time")
+    serve.add_argument("program", help="V+ program file or GPL project folder")
+    serve.add_argument("--scene", default=None, help="cell description (default: scenes/scara_pick.toml)")
+    serve.add_argument("--main", default=None, help="program to execute (as for twin run)")
+    serve.add_argument("--report", default=None, help="write the placement report (JSON) here at the end")
+    serve.add_argument("--rrd", default=None, help="also write a Rerun recording here")
+    serve.add_argument("--viewer", action="store_true", help="stream to a live Rerun viewer (spawned)")
+    serve.add_argument("--fast", action="store_true", help="run as fast as possible, not in real time")
+    serve.add_argument("--speed", type=float, default=1.0, help="simulated seconds per wall second (default 1)")
+    serve.add_argument("--max-sim-time", type=float, default=float("inf"), help="stop after this many simulated seconds")
+    serve.add_argument("--seed", type=int, default=None, help="random seed (default: the scene's)")
+    serve.set_defaults(handler=_serve)
 
     check = sub.add_parser("check", help="check a report against expectations")
     check.add_argument("report")

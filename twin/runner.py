@@ -83,6 +83,48 @@ def _start_gpl(sim: Simulation, project: Path, main: str | None, console: Consol
     return system
 
 
+@dataclass
+class StartedRun:
+    """A cell with its program loaded and started, not yet simulated."""
+
+    program: Path
+    scene: Path
+    simulation: Simulation
+    system: VPlusSystem | GplSystem
+    report_path: str | Path | None
+
+
+def run_program(
+    program: str | Path,
+    scene: str | Path | None = None,
+    main: str | None = None,
+    report_path: str | Path | None = None,
+    rrd_path: str | Path | None = None,
+    max_sim_time: float = 3600.0,
+    seed: int | None = None,
+    console: Console | None = None,
+    progress: bool = False,
+    handle_signals: bool = False,
+) -> RunResult:
+    """Load the cell, load and start the program (a V+ file or a GPL project
+    folder), simulate, report.
+
+    `progress`: a progress line on standard error once the run lasts a few seconds.
+    `handle_signals`: Ctrl-C (SIGINT) and SIGTERM stop the run at the next major cycle;
+    the report (marked interrupted) and the recording are still written (a second Ctrl-C
+    stops at once).  Only from the main thread; `twin run` sets both."""
+    # From the start: a signal while the cell loads stops the run before its first cycle;
+    # and on, while the recording and the report are written.
+    with _stop_on_signals(handle_signals) as stop:
+        started = start_program(program, scene, main, report_path, rrd_path, seed, console)
+        sim = started.simulation
+        sim.stop = stop
+        sim.begin(max_sim_time)
+        with _progress(sim, progress) as on_cycle:
+            sim.advance(on_cycle=on_cycle)
+        return finish_run(started, sim.outcome())
+
+
 @contextmanager
 def _stop_on_signals(enabled: bool):
     """SIGINT and SIGTERM set the yielded event (the run stops at its next cycle); a second
@@ -119,9 +161,37 @@ def _progress(sim: Simulation, enabled: bool):
         line.close()
 
 
-def _finish(sim: Simulation, system, program: Path, scene: Path, report_path: str | Path | None) -> Report:
-    """Close the recording and write the report (also after an interrupted run)."""
-    outcome = sim.outcome()
+def start_program(program: str | Path, scene: str | Path | None = None, main: str | None = None,
+                  report_path: str | Path | None = None, rrd_path: str | Path | None = None,
+                  seed: int | None = None, console: Console | None = None, recorder=None) -> StartedRun:
+    """Load the cell and the program and start it (`recorder`: one already made, as
+    `twin serve` makes for a live viewer)."""
+    program = find_user_file(program)   # as given, else the bundled file of that name
+    if not program.exists():
+        raise ProgramError(f"*Nonexistent file* {program}", file=str(program))
+    scene = find_user_file(scene) if scene is not None else DEFAULT_SCENE
+    if not scene.exists():
+        raise ProgramError(f"{scene}: no such scene file", file=str(scene))
+
+    sim = Simulation(scene, seed=seed)
+    sim.recorder = recorder(sim) if recorder is not None else _open_recorder(sim, rrd_path)
+    sandbox = _sandbox(program, report_path or rrd_path)
+    if program.is_dir():
+        system = _start_gpl(sim, program, main, console, sandbox)
+    else:
+        system = _start_vplus(sim, program, main, console, sandbox)
+
+    if sim.recorder is not None:
+        sim.recorder.log_text(0.0, f"twin run {program} on {scene}")
+    return StartedRun(program, scene, sim, system, report_path)
+
+
+def finish_run(started: StartedRun, outcome) -> RunResult:
+    """Close the recording, build the report (and write it when asked)."""
+    sim, system, program, scene, report_path = (started.simulation, started.system, started.program,
+                                                started.scene, started.report_path)
+    if isinstance(system, VPlusSystem):
+        system.devices.close_network()  # a run stopped early still frees its ports
     if sim.recorder is not None:
         sim.recorder.log_text(sim.cell.time, system.console.output or "(no output)")
         sim.recorder.close()
@@ -136,50 +206,4 @@ def _finish(sim: Simulation, system, program: Path, scene: Path, report_path: st
     )
     if report_path is not None:
         report.write(report_path)
-    return report
-
-
-def run_program(
-    program: str | Path,
-    scene: str | Path | None = None,
-    main: str | None = None,
-    report_path: str | Path | None = None,
-    rrd_path: str | Path | None = None,
-    max_sim_time: float = 3600.0,
-    seed: int | None = None,
-    console: Console | None = None,
-    progress: bool = False,
-    handle_signals: bool = False,
-) -> RunResult:
-    """Load the cell, load and start the program (a V+ file or a GPL project
-    folder), simulate, report.
-
-    `progress`: a progress line on standard error once the run lasts a few seconds.
-    `handle_signals`: Ctrl-C (SIGINT) and SIGTERM stop the run at the next major cycle;
-    the report (marked interrupted) and the recording are still written (a second Ctrl-C
-    stops at once).  Only from the main thread; `twin run` sets both."""
-    program = find_user_file(program)   # as given, else the bundled file of that name
-    if not program.exists():
-        raise ProgramError(f"*Nonexistent file* {program}", file=str(program))
-    scene = find_user_file(scene) if scene is not None else DEFAULT_SCENE
-    if not scene.exists():
-        raise ProgramError(f"{scene}: no such scene file", file=str(scene))
-
-    # From the start: a signal while the cell loads stops the run before its first cycle.
-    with _stop_on_signals(handle_signals) as stop:   # also while the recording and report are written
-        sim = Simulation(scene, seed=seed)
-        sim.stop = stop
-        sim.recorder = _open_recorder(sim, rrd_path)
-        sandbox = _sandbox(program, report_path or rrd_path)
-        if program.is_dir():
-            system = _start_gpl(sim, program, main, console, sandbox)
-        else:
-            system = _start_vplus(sim, program, main, console, sandbox)
-
-        if sim.recorder is not None:
-            sim.recorder.log_text(0.0, f"twin run {program} on {scene}")
-        sim.begin(max_sim_time)
-        with _progress(sim, progress) as on_cycle:
-            sim.advance(on_cycle=on_cycle)
-        report = _finish(sim, system, program, scene, report_path)
     return RunResult(report, sim)

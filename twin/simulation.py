@@ -56,6 +56,7 @@ class Simulation:
         self._events_recorded = 0  # cell events already sent to the recorder
         self.settle_s = float(controller_cfg.get("settle_after_program_s", 3.0))
         self.stop = threading.Event()   # set (by a signal handler): the run stops at the next cycle
+        self.interrupted = False        # the last run was stopped by `stop`
 
     def taught_locations(self) -> dict[str, Location]:
         return {name: Location(*values) for name, values in self.cell.locations().items()}
@@ -63,10 +64,12 @@ class Simulation:
     def clock(self) -> float:
         return self.cell.time
 
-    def run(self, max_sim_time: float = 3600.0) -> RunOutcome:
-        """Run until every task has ended and the cell has settled (or `stop_requested`)."""
+    def run(self, max_sim_time: float = 3600.0, on_cycle: Callable[[], bool] | None = None) -> RunOutcome:
+        """Run until every task has ended and the cell has settled, or until `on_cycle`,
+        called after every major cycle (`twin serve` paces and stops with it), says stop,
+        or `stop` is set."""
         self.begin(max_sim_time)
-        self.advance()
+        self.advance(on_cycle=on_cycle)
         return self.outcome()
 
     def begin(self, max_sim_time: float = 3600.0) -> None:
@@ -80,15 +83,18 @@ class Simulation:
         self._crashed = False
         self._wall_s = 0.0
 
-    def advance(self, until: Callable[[], bool] | None = None, on_cycle: Callable[[], None] | None = None) -> bool:
+    def advance(self, until: Callable[[], bool] | None = None,
+                on_cycle: Callable[[], bool | None] | None = None) -> bool:
         """Major cycles until the run is over or `until()` is true after a cycle; returns
-        whether the run is over.  `on_cycle` is called after every cycle (progress)."""
+        whether the run is over.  `on_cycle` is called after every cycle (progress, pacing);
+        a true answer ends the run there."""
         wall_start = time.perf_counter()
         try:
             while not self.finished:
                 self._cycle()
-                if on_cycle is not None:
-                    on_cycle()
+                if on_cycle is not None and on_cycle() and not self.finished:
+                    self.finished = True
+                    self.program_end = self.program_end if self.program_end is not None else self.cell.time
                 if self.stop.is_set() and not self.finished:
                     self.finished = self.interrupted = True
                     self.program_end = self.program_end if self.program_end is not None else self.cell.time

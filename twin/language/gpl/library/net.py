@@ -22,6 +22,7 @@ from __future__ import annotations
 import select
 import socket
 
+from ....controller.network import listening_ports
 from . import codes
 from . import byref, gpl_class
 from .members import stored
@@ -236,6 +237,7 @@ class TcpListener:
             raise _socket_error(err) from None
         sock.setblocking(False)
         self._sock = sock
+        listening_ports.add(sock.getsockname()[1])
 
     def _s(self) -> socket.socket:
         if self._sock is None:
@@ -260,6 +262,7 @@ class TcpListener:
 
     def Stop(self) -> None:
         if self._sock is not None:
+            listening_ports.discard(self._sock.getsockname()[1])
             self._sock.close()
             self._sock = None
 
