@@ -121,7 +121,7 @@ def _check_run(args: argparse.Namespace, report, expect: dict) -> int:
     outcomes = evaluate(report, expect)
     if args.junit and not _safe_junit(args.junit, outcomes, report=report):
         return 2
-    return print_outcomes(outcomes, args.report or args.program)
+    return print_outcomes(outcomes, args.report or " ".join(map(str, args.program)))
 
 
 def _run_seeds(args: argparse.Namespace, expect: dict | None) -> int:
@@ -164,7 +164,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
 
     run = sub.add_parser("run", help="run a V+ program or a GPL project on a cell")
-    run.add_argument("program", help="V+ program file (.pg, .v2) or GPL project folder (with Project.gpr)")
+    run.add_argument("program", nargs="+", help="V+ program files (.pg, .v2; loaded together, the first "
+                     "file's first program starts) or a GPL project folder (with Project.gpr)")
     run.add_argument("--scene", default=None, help="cell description (default: scenes/scara_pick.toml)")
     run.add_argument("--main", default=None, help="program to execute (default: the first .PROGRAM; "
                      "GPL: the start procedure of Project.gpr)")

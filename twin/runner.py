@@ -59,15 +59,16 @@ def _sandbox(program: Path, output: str | Path | None) -> Path:
     return Path(output).resolve().parent / f"{program.stem}-files"
 
 
-def _start_vplus(sim: Simulation, program: Path, main: str | None, console: Console | None,
+def _start_vplus(sim: Simulation, programs: list[Path], main: str | None, console: Console | None,
                  sandbox: Path) -> VPlusSystem:
+    """Load every V+ file (LOAD of several modules); the first file's first program starts."""
     system = VPlusSystem(sim.controller, sim.io, sim.clock, console=console, seed=sim.cell.seed,
                          sandbox=sandbox)
     for name, location in sim.taught_locations().items():
         system.define_location(name, location)
-    names = system.load(program)
-    if not names:
-        raise ProgramError(f"{program}: no .PROGRAM in file", file=str(program))
+    names = system.load_files(programs)
+    if not names and main is None:
+        raise ProgramError(f"{programs[0]}: no .PROGRAM in file", file=str(programs[0]))
     sim.scheduler.add(system.start(main or names[0]))
     return system
 
@@ -95,7 +96,7 @@ class StartedRun:
 
 
 def run_program(
-    program: str | Path,
+    program: str | Path | list[str | Path],
     scene: str | Path | None = None,
     main: str | None = None,
     report_path: str | Path | None = None,
@@ -107,7 +108,7 @@ def run_program(
     handle_signals: bool = False,
 ) -> RunResult:
     """Load the cell, load and start the program (a V+ file or a GPL project
-    folder), simulate, report.
+    folder, or several V+ files loaded together), simulate, report.
 
     `progress`: a progress line on standard error once the run lasts a few seconds.
     `handle_signals`: Ctrl-C (SIGINT) and SIGTERM stop the run at the next major cycle;
@@ -161,14 +162,19 @@ def _progress(sim: Simulation, enabled: bool):
         line.close()
 
 
-def start_program(program: str | Path, scene: str | Path | None = None, main: str | None = None,
+def start_program(program: str | Path | list[str | Path], scene: str | Path | None = None, main: str | None = None,
                   report_path: str | Path | None = None, rrd_path: str | Path | None = None,
                   seed: int | None = None, console: Console | None = None, recorder=None) -> StartedRun:
     """Load the cell and the program and start it (`recorder`: one already made, as
     `twin serve` makes for a live viewer)."""
-    program = find_user_file(program)   # as given, else the bundled file of that name
-    if not program.exists():
-        raise ProgramError(f"*Nonexistent file* {program}", file=str(program))
+    # as given, else the bundled file of that name; several V+ files are loaded together
+    programs = [find_user_file(p) for p in ([program] if isinstance(program, (str, Path)) else program)]
+    program = programs[0]
+    for path in programs:
+        if not path.exists():
+            raise ProgramError(f"*Nonexistent file* {path}", file=str(path))
+    if program.is_dir() and len(programs) > 1:
+        raise ProgramError(f"{program}: a GPL project folder is run alone", file=str(program))
     scene = find_user_file(scene) if scene is not None else DEFAULT_SCENE
     if not scene.exists():
         raise ProgramError(f"{scene}: no such scene file", file=str(scene))
@@ -179,7 +185,7 @@ def start_program(program: str | Path, scene: str | Path | None = None, main: st
     if program.is_dir():
         system = _start_gpl(sim, program, main, console, sandbox)
     else:
-        system = _start_vplus(sim, program, main, console, sandbox)
+        system = _start_vplus(sim, programs, main, console, sandbox)
 
     if sim.recorder is not None:
         sim.recorder.log_text(0.0, f"twin run {program} on {scene}")

@@ -35,7 +35,7 @@ def seed_report_path(report: str | Path | None, seed: int) -> Path | None:
     return report.with_name(f"{report.stem}-seed{seed}{report.suffix or '.json'}")
 
 
-def _one(program: str, scene: str | None, main: str | None, seed: int, max_sim_time: float,
+def _one(program: str | list[str], scene: str | None, main: str | None, seed: int, max_sim_time: float,
          report: str | None, expect: dict | None) -> SeedOutcome:
     from .check import evaluate
     from .errors import ProgramError
@@ -56,7 +56,7 @@ def _one(program: str, scene: str | None, main: str | None, seed: int, max_sim_t
     return SeedOutcome(seed, failures, rep.sim_time_s, str(path) if path else None)
 
 
-def run_seeds(program: str, seeds: list[int], *, scene: str | None = None, main: str | None = None,
+def run_seeds(program: str | list[str], seeds: list[int], *, scene: str | None = None, main: str | None = None,
               max_sim_time: float = 3600.0, report: str | None = None, expect: dict | None = None,
               workers: int | None = None) -> list[SeedOutcome]:
     """Run every seed (in parallel, one process per CPU core at most); outcomes in seed order."""
