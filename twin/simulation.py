@@ -140,6 +140,9 @@ class Simulation:
             error = self._stop_for_collision(collisions[0])
             if error is not None:  # no program was running to take it
                 errors.append(error.as_dict(cell.time))
+        fault = controller.take_fault()  # the robot stopped by itself (a belt window violation)
+        if fault is not None and self._give_to_tasks(fault) is not None:
+            errors.append(fault.as_dict(cell.time))
         self._record()
 
     def _record(self) -> None:
@@ -168,13 +171,18 @@ class Simulation:
         turn errors into its own report)."""
         self.controller.halt()
         text = f"*Collision detected* {collision['robot_geom']} with {collision['with']}"
+        return self._give_to_tasks(ProgramError(text, COLLISION))
+
+    def _give_to_tasks(self, error: ProgramError) -> ProgramError | None:
+        """Each running program stops with `error` at the step it is executing; returns the
+        error when no program took it."""
         taken = False
         for task in [task for task in self.scheduler.tasks if not task.finished]:
             try:
-                task.generator.throw(ProgramError(text, COLLISION))  # one each: it gets located
+                task.generator.throw(ProgramError(error.message, error.code))  # one each: it gets located
                 taken = True
             except StopIteration:
                 taken = True
             except ProgramError:
                 task.finished = True
-        return None if taken else ProgramError(text, COLLISION)
+        return None if taken else error

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import struct
 
+from ...controller.belt import BeltFrame, BeltLocation
 from ...controller.location import Location
 from ...errors import ProgramError
 from . import messages as msg
@@ -138,14 +139,17 @@ def _argument(value, kind: str, name: str):
 
 
 def _location(value) -> Location:
+    """A transformation; a belt location (%belt:loc) is where its belt has it now."""
+    if isinstance(value, BeltLocation):
+        return value.instantaneous()
     if not isinstance(value, Location):
         raise fail(msg.WRONG_TYPE, "location expected")
     return value
 
 
 def _point(value):
-    """Where a motion may go: a transformation or a precision point."""
-    if not isinstance(value, (Location, tuple)):
+    """Where a motion may go: a transformation, a precision point or a belt location."""
+    if not isinstance(value, (Location, tuple, BeltLocation)):
         raise fail(msg.WRONG_TYPE, "location expected")
     return value
 
@@ -175,7 +179,15 @@ def components(loc: Location) -> tuple[float, ...]:
     return x, y, z, yaw, pitch, roll
 
 
-def _compound(a, b) -> Location:
+def _compound(a, b) -> Location | BeltLocation:
+    """a:b.  A belt variable may only be the leftmost element: %belt:loc is a location
+    fixed to the belt (eV+ guide, "Belt-Relative Motion Instructions")."""
+    if isinstance(b, (BeltFrame, BeltLocation)):
+        raise fail(msg.ILLEGAL_OPERATION, "a belt variable must be the leftmost element of a compound location")
+    if isinstance(a, BeltFrame):
+        return BeltLocation(a, _location(b))
+    if isinstance(a, BeltLocation):
+        return a * _location(b)
     return _location(a) * _location(b)
 
 
