@@ -124,8 +124,11 @@ def test_a_misspelt_event_kind_in_a_file_is_exit_2_before_running(tmp_path, caps
 
 def test_event_kinds_are_those_the_cell_emits():
     emitted = set()
+    # ctx.event("grasp", ...) and the kinds parts.activate(..., kind="present") is given
+    pattern = re.compile(r'\.event\("(\w+)"|activate\(.*kind="(\w+)"|def activate\(.*kind: str = "(\w+)"')
     for source in (ROOT / "twin" / "physics").rglob("*.py"):
-        emitted |= set(re.findall(r'"kind":\s*"(\w+)"', source.read_text()))
+        for found in pattern.findall(source.read_text()):
+            emitted |= {k for k in found if k}
     assert emitted == set(EVENT_KINDS), "update twin.report.EVENT_KINDS and twin/schemas/expect.schema.json"
     schema_kinds = load_schema("expect")["$defs"]["event_kind"]["enum"]
     assert set(schema_kinds) == set(EVENT_KINDS)

@@ -32,6 +32,10 @@ error (a typo must never pass silently). Example::
     median = { max = 2.0 }     # also mean, min, max and percentiles p<N> (p90, p99.5...)
     p95 = { max = 2.1 }
 
+    [counts]                   # the report's counts (count or bounds), see twin/report.py
+    placed = 150               # created, picked, placed, missed, dropped
+    missed = 0
+
     [events]                   # number of events of each kind (count or bounds)
     collision = 0
     dropped = { max = 1 }
@@ -83,7 +87,7 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
-from twin.report import EVENT_KINDS, Report, ReportError
+from twin.report import COUNT_NAMES, EVENT_KINDS, Report, ReportError
 
 __all__ = ["check", "evaluate", "load_expect", "main_check", "print_outcomes", "write_junit", "percentile",
            "ExpectError", "Outcome"]
@@ -197,6 +201,7 @@ SECTIONS = {
     "parts": {"total", "dropped", "unplaced", "region", "pose"},
     "time": {"sim_time_s", "wall_time_s", "realtime_factor", "cycle_time_s", "place_regions"},
     "program": {"errors", "output_contains", "output_excludes"},
+    "counts": set(COUNT_NAMES),
     "cycle_time": None,   # mean, median, min, max, p<N>: checked by _cycle_statistic
     "events": set(EVENT_KINDS) | {"order"},
 }
@@ -266,6 +271,19 @@ def _compile(expect: dict) -> list[Check]:
         checks.append(("parts", f"{key} = {b.written()}", part_check))
     checks += _part_region_checks(parts.get("region", {}))
     checks += _part_pose_checks(parts.get("pose", []))
+
+    # [counts]
+    for key, value in expect.get("counts", {}).items():
+        b = _bounds(f"counts.{key}", value, integer=True, allow_bare=True)
+
+        def count_check(r: Report, key=key, b=b) -> str | None:
+            if r.counts is None:
+                return f"the report has no counts (written by a twin without them); expected {key} {b.describe()}"
+            n = r.counts[key]
+            if b.holds(n):
+                return None
+            return f"{_plural(n, 'part')} {key}, expected {b.describe()}"
+        checks.append(("counts", f"{key} = {b.written()}", count_check))
 
     # [time]
     time = expect.get("time", {})

@@ -40,7 +40,8 @@ class Simulation:
 
     def __init__(self, scene: str | Path = DEFAULT_SCENE, seed: int | None = None, recorder=None):
         self.scene_path = Path(scene)
-        self.cell = Cell.from_scene(self.scene_path, seed=seed)
+        self.io = DigitalIO()  # the controller's signals; the cell's components read and drive them
+        self.cell = Cell.from_scene(self.scene_path, seed=seed, io=self.io)
         self.kinematics = self.cell.kinematics
         controller_cfg = self.cell.scene.get("controller", {})
         settings = MotionSettings(
@@ -50,7 +51,6 @@ class Simulation:
             ),
         )
         self.controller = VirtualController(self.cell, self.kinematics, settings)
-        self.io = DigitalIO()
         self.scheduler = Scheduler()
         self.recorder = recorder
         self._events_recorded = 0  # cell events already sent to the recorder
@@ -163,6 +163,7 @@ class Simulation:
         self._events_recorded = len(events)
         if recorder.wants_frame(cell.time):
             recorder.sample(cell.time, cell.data)
+            cell.record(recorder)
 
     def _stop_for_collision(self, collision: dict) -> ProgramError | None:
         """The robot hit something: it stops where it is, and each running program stops with
