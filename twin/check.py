@@ -87,7 +87,7 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
-from twin.report import COUNT_NAMES, EVENT_KINDS, Report, ReportError
+from twin.report import COUNT_NAMES, EVENT_KINDS, VISION_COUNT_NAMES, Report, ReportError
 
 __all__ = ["check", "evaluate", "load_expect", "main_check", "print_outcomes", "write_junit", "percentile",
            "ExpectError", "Outcome"]
@@ -201,7 +201,7 @@ SECTIONS = {
     "parts": {"total", "dropped", "unplaced", "region", "pose"},
     "time": {"sim_time_s", "wall_time_s", "realtime_factor", "cycle_time_s", "place_regions"},
     "program": {"errors", "output_contains", "output_excludes"},
-    "counts": set(COUNT_NAMES),
+    "counts": set(COUNT_NAMES) | set(VISION_COUNT_NAMES),
     "cycle_time": None,   # mean, median, min, max, p<N>: checked by _cycle_statistic
     "events": set(EVENT_KINDS) | {"order"},
 }
