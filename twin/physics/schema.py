@@ -152,7 +152,10 @@ class Conveyor(Section):
     place: bool = False                 # releasing a part on it is a put-down
     encoder: Encoder | None = None
 
-    _direction = field_validator("direction")(lambda v: _nonzero(v))
+    @field_validator("direction")
+    @classmethod
+    def _direction(cls, v: list[float]) -> list[float]:
+        return _nonzero(v)
 
 
 class Source(Section):
