@@ -219,6 +219,8 @@ class FingerGripper(WeldGripper):
         return 2.0 * mu * self.grip_force()
 
     def check(self, t: float) -> None:
+        if self.config.holding_input is not None:
+            self.ctx.io.set(self.config.holding_input, self.held is not None)
         if self.busy:
             self._check_grasp()
         elif self.held is not None and t >= self._held_since + SLIP_GRACE_S:
