@@ -76,3 +76,9 @@ class ProgramError(Exception):
             "program": self.program,
             "time": time,
         }
+
+
+class SceneError(ProgramError):
+    """A scene file that cannot describe a cell (bad TOML, unknown section or key, wrong
+    type, impossible value, missing reference): a user error without a controller code,
+    so `twin run` prints it (file: key path: what was expected) and exits 2."""

@@ -21,6 +21,7 @@ from .controller.scheduler import Scheduler
 from .errors import ProgramError
 from .physics.cell import Cell
 from .resources import bundled
+from .vision.server import VisionServer
 
 MAJOR_CYCLE_S = 0.016
 DEFAULT_SCENE = bundled("scenes/scara_pick.toml")
@@ -39,7 +40,8 @@ class Simulation:
 
     def __init__(self, scene: str | Path = DEFAULT_SCENE, seed: int | None = None, recorder=None):
         self.scene_path = Path(scene)
-        self.cell = Cell.from_scene(self.scene_path, seed=seed)
+        self.io = DigitalIO()  # the controller's signals; the cell's components read and drive them
+        self.cell = Cell.from_scene(self.scene_path, seed=seed, io=self.io)
         self.kinematics = self.cell.kinematics
         controller_cfg = self.cell.scene.get("controller", {})
         settings = MotionSettings(
@@ -49,9 +51,9 @@ class Simulation:
             ),
         )
         self.controller = VirtualController(self.cell, self.kinematics, settings)
-        self.io = DigitalIO()
         self.scheduler = Scheduler()
         self.recorder = recorder
+        self.vision = VisionServer.for_cell(self.cell, self.cell.scene, self.scene_path)  # None without [vision]
         self._events_recorded = 0  # cell events already sent to the recorder
         self.settle_s = float(controller_cfg.get("settle_after_program_s", 3.0))
 
@@ -125,6 +127,7 @@ class Simulation:
         self._events_recorded = len(events)
         if recorder.wants_frame(cell.time):
             recorder.sample(cell.time, cell.data)
+            cell.record(recorder)
 
     def _stop_for_collision(self, collision: dict) -> ProgramError | None:
         """The robot hit something: it stops where it is, and each running program stops with

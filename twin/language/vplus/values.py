@@ -93,18 +93,14 @@ def _real(value) -> float:
     """A real argument or value: a string, location, precision point or array is
     *Wrong data type*."""
     if isinstance(value, float):
-        return value
+        if value - value == 0.0:  # finite
+            return value
+        # An infinity from 64-bit arithmetic inside an expression (a single store rounds
+        # but does not check it, to keep stores cheap): any use of it is an overflow.
+        raise fail(msg.OVERFLOW, "beyond the range of a real")
     if isinstance(value, int):
         return float(value)
     raise fail(msg.WRONG_TYPE, "real value expected")
-
-
-def _double(value) -> float:
-    """Store into a DOUBLE variable: a real within the double range."""
-    value = _real(value)
-    if not math.isfinite(value):
-        raise fail(msg.OVERFLOW, "beyond the range of a DOUBLE")
-    return value
 
 
 def single(value: float) -> float:
@@ -116,10 +112,7 @@ def single(value: float) -> float:
 def _single(value) -> float:
     """Store into a real variable: a real, rounded to single precision."""
     try:
-        stored = _SINGLE.unpack(_SINGLE.pack(value))[0]
-        if stored - stored != 0.0:  # an infinity or NaN from 64-bit arithmetic inside the expression
-            raise OverflowError
-        return stored
+        return _SINGLE.unpack(_SINGLE.pack(value))[0]
     except OverflowError:
         raise fail(msg.OVERFLOW, f"{value:g} is beyond single precision") from None
     except struct.error:

@@ -22,7 +22,7 @@ from __future__ import annotations
 import select
 import socket
 
-from ....controller.network import listening_ports
+from ....controller.network import listening, real_port
 from . import codes
 from . import byref, gpl_class
 from .members import stored
@@ -64,8 +64,8 @@ class IPEndPoint:
         self._port = value
 
     def address(self) -> tuple[str, int]:
-        """The loopback address the twin uses for this endpoint."""
-        return LOOPBACK, self._port
+        """The loopback address the twin uses for this endpoint (its port as mapped)."""
+        return LOOPBACK, real_port(self._port)
 
 
 def _endpoint(rt, value) -> IPEndPoint:
@@ -237,7 +237,7 @@ class TcpListener:
             raise _socket_error(err) from None
         sock.setblocking(False)
         self._sock = sock
-        listening_ports.add(sock.getsockname()[1])
+        listening[sock.getsockname()[1]] = self._endpoint.Port
 
     def _s(self) -> socket.socket:
         if self._sock is None:
@@ -262,7 +262,7 @@ class TcpListener:
 
     def Stop(self) -> None:
         if self._sock is not None:
-            listening_ports.discard(self._sock.getsockname()[1])
+            listening.pop(self._sock.getsockname()[1], None)
             self._sock.close()
             self._sock = None
 
@@ -276,7 +276,7 @@ class UdpClient:
         sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         port = _endpoint(rt, endpoint).Port if endpoint is not None else 0
         try:
-            sock.bind((LOOPBACK, port))
+            sock.bind((LOOPBACK, real_port(port) if port else 0))
         except OSError as err:
             sock.close()
             raise _socket_error(err) from None
