@@ -19,11 +19,15 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .errors import ProgramError
-from .language.gpl.runtime import GplSystem
+from typing import TYPE_CHECKING
+
 from .language.vplus.runtime import Console, VPlusSystem
 from .report import Report
 from .resources import find_user_file
 from .simulation import DEFAULT_SCENE, Simulation
+
+if TYPE_CHECKING:
+    from .language.gpl.runtime import GplSystem
 
 
 @dataclass
@@ -78,6 +82,8 @@ def _start_gpl(sim: Simulation, project: Path, main: str | None, console: Consol
                sandbox: Path) -> GplSystem:
     """A GPL project folder: Project.gpr names the files and the start procedure
     (`main` overrides it)."""
+    from .language.gpl.runtime import GplSystem  # here: a V+ run need not load the GPL compiler
+
     system = GplSystem(sim.controller, sim.io, sim.clock, sim.scheduler, console=console, sandbox=sandbox,
                        seed=sim.cell.seed)
     system.vision = sim.vision
