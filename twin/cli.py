@@ -4,6 +4,7 @@
                      [--max-sim-time S] [--seed N]
     twin check REPORT --expect EXPECT.toml [--junit FILE.xml]
     twin serve PROGRAM|PROJECT_DIR [--scene SCENE] [--fast] [--viewer] [--report R.json] ...
+    twin calibrate SCENE [--camera NAME]
 
 A user's mistake (bad syntax, an unreachable location, a missing file) is
 printed as the controller would print it, with file and line, and never as a
@@ -82,6 +83,21 @@ def _check(args: argparse.Namespace) -> int:
     return main_check(argv)
 
 
+def _calibrate(args: argparse.Namespace) -> int:
+    from .vision.calibrate import calibrate_scene
+
+    try:
+        done = calibrate_scene(args.scene, args.camera)
+    except (ValueError, OSError, ProgramError) as err:
+        print(f"twin calibrate: {err}", file=sys.stderr)
+        return 2
+    for config, model, path in done:
+        print(f"camera {config.name}: {model.points} target sightings, residual {model.residual_mm:.3f} mm RMS "
+              f"({model.residual_max_mm:.3f} mm max, {model.residual_px:.3f} px); focal length "
+              f"{model.K[0, 0]:.1f} px; written to {path}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="twin", description="Run robot programs on a digital twin of the cell.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -120,6 +136,11 @@ def build_parser() -> argparse.ArgumentParser:
     check.add_argument("--expect", required=True)
     check.add_argument("--junit", default=None, help="also write a JUnit XML report")
     check.set_defaults(handler=_check)
+
+    calibrate = sub.add_parser("calibrate", help="calibrate a cell's cameras from images (docs/vision.md)")
+    calibrate.add_argument("scene", help="cell description with [[camera]] and [camera.calibration]")
+    calibrate.add_argument("--camera", default=None, help="only this camera")
+    calibrate.set_defaults(handler=_calibrate)
     return parser
 
 

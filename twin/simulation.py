@@ -21,6 +21,7 @@ from .controller.scheduler import Scheduler
 from .errors import ProgramError
 from .physics.cell import Cell
 from .resources import bundled
+from .vision.server import VisionServer
 
 MAJOR_CYCLE_S = 0.016
 DEFAULT_SCENE = bundled("scenes/scara_pick.toml")
@@ -52,6 +53,7 @@ class Simulation:
         self.controller = VirtualController(self.cell, self.kinematics, settings)
         self.scheduler = Scheduler()
         self.recorder = recorder
+        self.vision = VisionServer.for_cell(self.cell, self.cell.scene, self.scene_path)  # None without [vision]
         self._events_recorded = 0  # cell events already sent to the recorder
         self.settle_s = float(controller_cfg.get("settle_after_program_s", 3.0))
 

@@ -241,6 +241,51 @@ class Tray(Section):
     swap_when_full: bool = False        # an operator takes a full tray away (an empty one in its place)
 
 
+class CameraCalibration(Section):
+    file: str
+    x: Annotated[list[Finite], Field(min_length=1)]
+    y: Annotated[list[Finite], Field(min_length=1)]
+    heights: Annotated[list[Annotated[float, Field(ge=1.0, allow_inf_nan=False)]], Field(min_length=2)] = [30.0, 110.0]
+    plane_z: Finite = 0.0
+    radius: Positive = 9.0
+    rgba: Rgba = [0.0, 1.0, 0.0, 1.0]
+
+
+class CameraLight(Section):
+    pos: Vec3
+    diffuse: Annotated[list[Annotated[float, Field(ge=0, le=1)]], Field(min_length=3, max_length=3)] = [0.5, 0.5, 0.5]
+
+
+class CameraSection(Section):
+    """[[camera]] (twin/physics/camera.py, docs/vision.md)."""
+    name: str
+    resolution: Annotated[list[Annotated[int, Field(gt=0, le=8192)]], Field(min_length=2, max_length=2)] = [640, 480]
+    focal_px: Positive | None = None
+    fov_deg: Annotated[float, Field(gt=0, lt=180)] | None = None
+    pose: Pose6 = [0.0, 0.0, 1000.0, 0.0, 180.0, 0.0]
+    mount: str | None = None
+    distortion: Annotated[list[Finite], Field(min_length=5, max_length=5)] = [0.0, 0.0, 0.0, 0.0, 0.0]
+    exposure: Positive = 1.0
+    noise: NonNegative = 0.0
+    seed: int = 0
+    light: CameraLight | None = None
+    depth_range_mm: Size2 = [50.0, 5000.0]
+    calibration: CameraCalibration | None = None
+
+    @model_validator(mode="after")
+    def _focal(self) -> "CameraSection":
+        if (self.focal_px is None) == (self.fov_deg is None):
+            raise ValueError("give one of focal_px (pixels) or fov_deg (vertical field of view, deg)")
+        return self
+
+
+class Vision(Section):
+    """[vision]: twin/vision/process.py checks the processes and names the process and
+    tool of a mistake."""
+    time_s: NonNegative = 0.08
+    process: list[dict[str, Any]] = []
+
+
 class Region(Section):
     lo: Vec3
     hi: Vec3
@@ -266,6 +311,8 @@ class Scene(Section):
     sensor: list[Sensor] = []
     bin: list[Bin] = []
     tray: list[Tray] = []
+    camera: list[CameraSection] = []
+    vision: Vision | None = None
     regions: dict[str, Region] = {}
     locations: dict[str, Pose6] = {}
 
@@ -275,7 +322,8 @@ class Scene(Section):
             raise ValueError(f"robot.home: location {self.robot.home!r} is not in [locations]"
                              f" (has: {', '.join(self.locations) or 'none'})")
         kinds = {"part": self.part, "feeder": self.feeder, "conveyor": self.conveyor,
-                 "source": self.source, "sensor": self.sensor, "bin": self.bin, "tray": self.tray}
+                 "source": self.source, "sensor": self.sensor, "bin": self.bin, "tray": self.tray,
+                 "camera": self.camera}
         for kind, items in kinds.items():
             names = [c.name for c in items]
             for i, name in enumerate(names):
