@@ -127,17 +127,21 @@ class WeldGripper(Component):
                               & (d.efc_id[:min(nefc, 12)] == eq))
         if len(rows) < 3:
             return 0.0
-        total = -d.efc_force[rows[:3]]  # the weld pulls body2 (the part) against its error
+        weld = -d.efc_force[rows[:3]]  # the weld pulls body2 (the part) against its error
         g = self.parts.geom[i]
-        pairs = d.contact.geom[:d.ncon]
+        contact = d.contact  # each attribute read copies MuJoCo's arrays: read them once
+        pairs = contact.geom[:d.ncon]
         robot = self._robot_geom[pairs]
         gripping = np.flatnonzero(((pairs[:, 0] == g) & robot[:, 1]) | ((pairs[:, 1] == g) & robot[:, 0]))
-        wrench = np.zeros(6)
-        for k in gripping.tolist():
-            mujoco.mj_contactForce(m, d, k, wrench)
-            force = d.contact.frame[k].reshape(3, 3).T @ wrench[:3]  # on geom2, world axes
-            total = total + (force if pairs[k, 1] == g else -force)
-        return float(np.linalg.norm(total))
+        if not len(gripping):
+            return float(np.linalg.norm(weld))
+        local = np.zeros((len(gripping), 6))
+        for row, k in zip(local, gripping.tolist()):
+            mujoco.mj_contactForce(m, d, k, row)
+        frames = contact.frame[gripping].reshape(-1, 3, 3)
+        forces = np.einsum("kji,kj->ki", frames, local[:, :3])  # on geom2, world axes
+        forces[pairs[gripping, 1] != g] *= -1.0
+        return float(np.linalg.norm(weld + forces.sum(axis=0)))
 
     def _check_slip(self) -> None:
         i = self.held
