@@ -139,11 +139,14 @@ class Robot(Component):
             contact = d.contact  # each attribute read copies MuJoCo's arrays: read them once
             g = contact.geom[:ncon]
             robot = self.robot_geom[g]
-            mixed = np.flatnonzero((robot[:, 0] != robot[:, 1]) & (contact.dist[:ncon] < 0.0))
-            for k in mixed.tolist():
-                ours, other = (int(g[k, 0]), int(g[k, 1])) if robot[k, 0] else (int(g[k, 1]), int(g[k, 0]))
-                if not gripper.contact_allowed(ours, int(parts.geom_part[other]), t):
-                    touching.add((ours, other))
+            mixed = (robot[:, 0] != robot[:, 1]) & (contact.dist[:ncon] < 0.0)
+            if mixed.any():
+                first_ours = robot[mixed, 0]
+                pairs = np.where(first_ours[:, None], g[mixed], g[mixed][:, ::-1])  # (ours, other)
+                # A box on a pad makes up to 4 contacts: each geom pair is judged once.
+                for ours, other in np.unique(pairs, axis=0).tolist():
+                    if not gripper.contact_allowed(ours, int(parts.geom_part[other]), t):
+                        touching.add((ours, other))
         m = self.model
         for ours, other in sorted(touching - self._touching):
             part = int(parts.geom_part[other])
