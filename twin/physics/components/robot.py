@@ -144,7 +144,7 @@ class Robot(Component):
                 first_ours = robot[mixed, 0]
                 pairs = np.where(first_ours[:, None], g[mixed], g[mixed][:, ::-1])  # (ours, other)
                 # A box on a pad makes up to 4 contacts: each geom pair is judged once.
-                for ours, other in np.unique(pairs, axis=0).tolist():
+                for ours, other in set(map(tuple, pairs.tolist())):
                     if not gripper.contact_allowed(ours, int(parts.geom_part[other]), t):
                         touching.add((ours, other))
         m = self.model
