@@ -116,6 +116,7 @@ def run_program(
     handle_signals: bool = False,
     spawn: bool = False,
     connect: str | None = None,
+    scene_overrides: dict[str, object] | None = None,
 ) -> RunResult:
     """Load the cell, load and start the program (a V+ file or a GPL project
     folder, or several V+ files loaded together), simulate, report.
@@ -125,7 +126,8 @@ def run_program(
     the report (marked interrupted) and the recording are still written (a second Ctrl-C
     stops at once).  Only from the main thread; `twin run` sets both.
     `spawn`: also stream to a Rerun viewer started for the run; `connect`: to the viewer (or
-    server) at this gRPC address, e.g. rerun+http://127.0.0.1:9876/proxy."""
+    server) at this gRPC address, e.g. rerun+http://127.0.0.1:9876/proxy.
+    `scene_overrides`: scene values by dotted key (`twin sweep --param`)."""
     # From the start: a signal while the cell loads stops the run before its first cycle;
     # and on, while the recording and the report are written.
     with _stop_on_signals(handle_signals) as stop:
@@ -133,7 +135,8 @@ def run_program(
         if spawn or connect is not None:
             def viewer(sim: Simulation):
                 return _open_recorder(sim, rrd_path, spawn=spawn, connect=connect)
-        started = start_program(program, scene, main, report_path, rrd_path, seed, console, recorder=viewer)
+        started = start_program(program, scene, main, report_path, rrd_path, seed, console, recorder=viewer,
+                                scene_overrides=scene_overrides)
         sim = started.simulation
         sim.stop = stop
         sim.begin(max_sim_time)
@@ -180,9 +183,10 @@ def _progress(sim: Simulation, enabled: bool):
 
 def start_program(program: str | Path | list[str | Path], scene: str | Path | None = None, main: str | None = None,
                   report_path: str | Path | None = None, rrd_path: str | Path | None = None,
-                  seed: int | None = None, console: Console | None = None, recorder=None) -> StartedRun:
+                  seed: int | None = None, console: Console | None = None, recorder=None,
+                  scene_overrides: dict[str, object] | None = None) -> StartedRun:
     """Load the cell and the program and start it (`recorder`: one already made, as
-    `twin serve` makes for a live viewer)."""
+    `twin serve` makes for a live viewer; `scene_overrides` as in `run_program`)."""
     # as given, else the bundled file of that name; several V+ files are loaded together
     programs = [find_user_file(p) for p in ([program] if isinstance(program, (str, Path)) else program)]
     program = programs[0]
@@ -195,7 +199,7 @@ def start_program(program: str | Path | list[str | Path], scene: str | Path | No
     if not scene.exists():
         raise ProgramError(f"{scene}: no such scene file", file=str(scene))
 
-    sim = Simulation(scene, seed=seed)
+    sim = Simulation(scene, seed=seed, overrides=scene_overrides)
     sim.recorder = recorder(sim) if recorder is not None else _open_recorder(sim, rrd_path)
     if sim.vision is not None:
         sim.vision.recorder = sim.recorder
