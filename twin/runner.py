@@ -44,13 +44,13 @@ def cycle_times(events: list[dict]) -> list[float]:
     return [round(b - a, 4) for a, b in zip(times, times[1:])]
 
 
-def _open_recorder(sim: Simulation, rrd_path: str | Path | None):
-    if rrd_path is None:
+def _open_recorder(sim: Simulation, rrd_path: str | Path | None, spawn: bool = False, connect: str | None = None):
+    """A recorder to the .rrd file and/or a viewer it spawns or connects to (None: no recording)."""
+    if rrd_path is None and not spawn and connect is None:
         return None
     from .recorder import Recorder
 
-    Path(rrd_path).parent.mkdir(parents=True, exist_ok=True)
-    return Recorder(sim.cell.model, rrd_path)
+    return Recorder(sim.cell.model, rrd_path, spawn=spawn, connect=connect)
 
 
 def _sandbox(program: Path, output: str | Path | None) -> Path:
@@ -114,6 +114,9 @@ def run_program(
     console: Console | None = None,
     progress: bool = False,
     handle_signals: bool = False,
+    spawn: bool = False,
+    connect: str | None = None,
+    scene_overrides: dict[str, object] | None = None,
 ) -> RunResult:
     """Load the cell, load and start the program (a V+ file or a GPL project
     folder, or several V+ files loaded together), simulate, report.
@@ -121,11 +124,19 @@ def run_program(
     `progress`: a progress line on standard error once the run lasts a few seconds.
     `handle_signals`: Ctrl-C (SIGINT) and SIGTERM stop the run at the next major cycle;
     the report (marked interrupted) and the recording are still written (a second Ctrl-C
-    stops at once).  Only from the main thread; `twin run` sets both."""
+    stops at once).  Only from the main thread; `twin run` sets both.
+    `spawn`: also stream to a Rerun viewer started for the run; `connect`: to the viewer (or
+    server) at this gRPC address, e.g. rerun+http://127.0.0.1:9876/proxy.
+    `scene_overrides`: scene values by dotted key (`twin sweep --param`)."""
     # From the start: a signal while the cell loads stops the run before its first cycle;
     # and on, while the recording and the report are written.
     with _stop_on_signals(handle_signals) as stop:
-        started = start_program(program, scene, main, report_path, rrd_path, seed, console)
+        viewer = None
+        if spawn or connect is not None:
+            def viewer(sim: Simulation):
+                return _open_recorder(sim, rrd_path, spawn=spawn, connect=connect)
+        started = start_program(program, scene, main, report_path, rrd_path, seed, console, recorder=viewer,
+                                scene_overrides=scene_overrides)
         sim = started.simulation
         sim.stop = stop
         sim.begin(max_sim_time)
@@ -172,9 +183,10 @@ def _progress(sim: Simulation, enabled: bool):
 
 def start_program(program: str | Path | list[str | Path], scene: str | Path | None = None, main: str | None = None,
                   report_path: str | Path | None = None, rrd_path: str | Path | None = None,
-                  seed: int | None = None, console: Console | None = None, recorder=None) -> StartedRun:
+                  seed: int | None = None, console: Console | None = None, recorder=None,
+                  scene_overrides: dict[str, object] | None = None) -> StartedRun:
     """Load the cell and the program and start it (`recorder`: one already made, as
-    `twin serve` makes for a live viewer)."""
+    `twin serve` makes for a live viewer; `scene_overrides` as in `run_program`)."""
     # as given, else the bundled file of that name; several V+ files are loaded together
     programs = [find_user_file(p) for p in ([program] if isinstance(program, (str, Path)) else program)]
     program = programs[0]
@@ -187,7 +199,7 @@ def start_program(program: str | Path | list[str | Path], scene: str | Path | No
     if not scene.exists():
         raise ProgramError(f"{scene}: no such scene file", file=str(scene))
 
-    sim = Simulation(scene, seed=seed)
+    sim = Simulation(scene, seed=seed, overrides=scene_overrides)
     sim.recorder = recorder(sim) if recorder is not None else _open_recorder(sim, rrd_path)
     if sim.vision is not None:
         sim.vision.recorder = sim.recorder
@@ -198,7 +210,11 @@ def start_program(program: str | Path | list[str | Path], scene: str | Path | No
         system = _start_vplus(sim, programs, main, console, sandbox)
 
     if sim.recorder is not None:
+        from .program_trace import ProgramTrace
+
         sim.recorder.log_text(0.0, f"twin run {program} on {scene}")
+        sim.recorder.log_cell(sim.cell)
+        sim.trace = ProgramTrace(sim.recorder, system)
     return StartedRun(program, scene, sim, system, report_path)
 
 
@@ -226,7 +242,8 @@ def finish_run(started: StartedRun, outcome) -> RunResult:
     if sim.vision is not None:
         sim.vision.close()  # its port and renderers
     if sim.recorder is not None:
-        sim.recorder.log_text(sim.cell.time, system.console.output or "(no output)")
+        if sim.trace is not None:
+            sim.trace.close(sim.cell.time)
         sim.recorder.close()
 
     report = build_report(started, outcome)

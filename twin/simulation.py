@@ -39,10 +39,11 @@ class RunOutcome:
 class Simulation:
     """A loaded cell with its robot controller, I/O and task scheduler."""
 
-    def __init__(self, scene: str | Path = DEFAULT_SCENE, seed: int | None = None, recorder=None):
+    def __init__(self, scene: str | Path = DEFAULT_SCENE, seed: int | None = None, recorder=None,
+                 overrides: dict[str, object] | None = None):
         self.scene_path = Path(scene)
         self.io = DigitalIO()  # the controller's signals; the cell's components read and drive them
-        self.cell = Cell.from_scene(self.scene_path, seed=seed, io=self.io)
+        self.cell = Cell.from_scene(self.scene_path, seed=seed, io=self.io, overrides=overrides)
         self.kinematics = self.cell.kinematics
         controller_cfg = self.cell.scene.get("controller", {})
         settings = MotionSettings(
@@ -54,6 +55,7 @@ class Simulation:
         self.controller = VirtualController(self.cell, self.kinematics, settings)
         self.scheduler = Scheduler()
         self.recorder = recorder
+        self.trace = None  # twin.program_trace.ProgramTrace: TYPE lines and program lines, recorded
         self.vision = VisionServer.for_cell(self.cell, self.cell.scene, self.scene_path)  # None without [vision]
         self._events_recorded = 0  # cell events already sent to the recorder
         self.settle_s = float(controller_cfg.get("settle_after_program_s", 3.0))
@@ -158,6 +160,8 @@ class Simulation:
         for number, value in changes:
             recorder.log_scalar(f"signals/{number}", cell.time, float(value))
         changes.clear()
+        if self.trace is not None:
+            self.trace.cycle(cell.time)
         events = cell.events
         for event in events[self._events_recorded:]:
             detail = ", ".join(f"{k}={v}" for k, v in event.items() if k not in ("t", "kind"))

@@ -87,6 +87,16 @@ class WeldGripper(Component):
     def tcp_position(self) -> np.ndarray:
         return self.data.site_xpos[self._tcp].copy()
 
+    @property
+    def tcp_site(self) -> int:
+        """The MuJoCo site id of the tool tip (the recording draws its path)."""
+        return self._tcp
+
+    def record(self, recorder, t: float) -> None:
+        """At a recording frame: closed (0/1) and the grip force on the held part (N)."""
+        recorder.log_scalar("gripper/closed", t, float(self.closed))
+        recorder.log_scalar("gripper/force_n", t, float(self.load(self.held)) if self.held is not None else 0.0)
+
     # ------------------------------------------------------------------ weld
     def _engage(self, i: int) -> None:
         """Weld part i to the gripper at their current relative pose."""
@@ -228,7 +238,9 @@ class FingerGripper(WeldGripper):
 
     def grip_force(self) -> float:
         """Squeeze on a gripped part, N: the smaller of the two jaw actuator forces."""
-        return float(np.min(np.abs(self.data.actuator_force[self._finger_act])))
+        left, right = self._finger_act.tolist()  # two floats: plain Python beats numpy's reductions
+        force = self.data.actuator_force
+        return min(abs(float(force[left])), abs(float(force[right])))
 
     def capacity(self, i: int) -> float:
         mu = max(self.pad_mu, float(self.model.geom_friction[self.parts.geom[i], 0]))
