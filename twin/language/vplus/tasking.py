@@ -357,6 +357,11 @@ class TaskControl:
 
     def current_step(self) -> tuple[str, int] | None:
         """(program, step) of the innermost V+ step this task is at, if running."""
+        where = self._innermost_statement()
+        return None if where is None else (where[0].name, where[1].step)
+
+    def _innermost_statement(self):
+        """(compiled program, statement) of the innermost V+ step this task is at, if running."""
         if self.finished or not self.levels:
             return None
         where = None
@@ -367,9 +372,22 @@ class TaskControl:
                 compiled = self.system.programs[frame.f_code.co_filename[7:-1]]
                 statement = compiled.line_map.get(frame.f_lineno)
                 if statement is not None:
-                    where = (compiled.name, statement.step)
+                    where = (compiled, statement)
             generator = getattr(generator, "gi_yieldfrom", None)
         return where
+
+    @property
+    def label(self) -> str:
+        return f"task {self.number}"
+
+    def current_location(self) -> dict | None:
+        """Where the task is, for the watchdog's message: program, step, file, line, source."""
+        where = self._innermost_statement()
+        if where is None:
+            return None
+        compiled, statement = where
+        return {"program": compiled.name, "step": statement.step, "file": compiled.file,
+                "line": statement.line, "text": self.system.source_line(compiled.file, statement.line)}
 
     # ------------------------------------------------------------ TASK()
     def task_info(self, select=None, number=None) -> float:
