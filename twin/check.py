@@ -60,6 +60,7 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
+from twin.outputs import write_atomically
 from twin.report import Report, ReportError
 
 __all__ = ["check", "evaluate", "load_expect", "main_check", "ExpectError", "Outcome"]
@@ -401,9 +402,7 @@ def write_junit(path: str | Path, outcomes: list[Outcome], *, suite: str = "twin
     root = ET.Element("testsuites")
     root.append(suite_el)
     ET.indent(root)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    ET.ElementTree(root).write(path, encoding="utf-8", xml_declaration=True)
+    write_atomically(path, ET.tostring(root, encoding="unicode", xml_declaration=True) + "\n")
 
 
 def build_parser(prog: str = "twin check") -> argparse.ArgumentParser:

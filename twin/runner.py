@@ -10,15 +10,18 @@ Python or a notebook:
 
 from __future__ import annotations
 
+import os
 import tempfile
 import uuid
 from dataclasses import dataclass
 from pathlib import Path
 
 from .errors import ProgramError
+from .outputs import check_replaceable, replace_output, temporary_beside
 from .language.gpl.runtime import GplSystem
 from .language.vplus.runtime import Console, VPlusSystem
 from .report import Report
+from .controller.sandbox import SandboxError, check_root
 from .simulation import DEFAULT_SCENE, Simulation
 
 
@@ -37,12 +40,15 @@ def cycle_times(events: list[dict]) -> list[float]:
 
 
 def _open_recorder(sim: Simulation, rrd_path: str | Path | None):
+    """A recorder writing to a temporary file beside `rrd_path`, renamed over it when the
+    run is over (outputs.replace_output): an interrupted run leaves the old file alone."""
     if rrd_path is None:
         return None
     from .recorder import Recorder
 
+    check_replaceable(rrd_path)
     Path(rrd_path).parent.mkdir(parents=True, exist_ok=True)
-    return Recorder(sim.cell.model, rrd_path)
+    return Recorder(sim.cell.model, temporary_beside(os.path.realpath(rrd_path)))
 
 
 def _sandbox(program: Path, output: str | Path | None) -> Path:
@@ -52,7 +58,13 @@ def _sandbox(program: Path, output: str | Path | None) -> Path:
     nothing behind."""
     if output is None:
         return Path(tempfile.gettempdir()) / f"twin-files-{uuid.uuid4().hex[:12]}"
-    return Path(output).resolve().parent / f"{program.stem}-files"
+    return sandbox_root(program, output)
+
+
+def sandbox_root(program: str | Path, output: str | Path) -> Path:
+    """`<program>-files` beside the report or recording `output` (twin.controller.sandbox
+    refuses it when it is a symbolic link)."""
+    return Path(output).resolve().parent / f"{Path(program).stem}-files"
 
 
 def _start_vplus(sim: Simulation, program: Path, main: str | None, console: Console | None,
@@ -79,6 +91,18 @@ def _start_gpl(sim: Simulation, project: Path, main: str | None, console: Consol
     return system
 
 
+def _load_cell(scene: Path, seed: int | None) -> Simulation:
+    """The cell of `scene`; a scene the loader cannot use is the user's error (exit 2), with
+    the loader's own words (a missing key, a wrong value, a broken model file)."""
+    try:
+        return Simulation(scene, seed=seed)
+    except KeyError as err:
+        raise ProgramError(f"{scene}: scene lacks the key {err}", file=str(scene)) from None
+    except (ValueError, TypeError, IndexError, OSError) as err:
+        text = str(err) if str(err).startswith(str(scene)) else f"{scene}: {err}"
+        raise ProgramError(text, file=str(scene)) from None
+
+
 def run_program(
     program: str | Path,
     scene: str | Path | None = None,
@@ -88,6 +112,8 @@ def run_program(
     max_sim_time: float = 3600.0,
     seed: int | None = None,
     console: Console | None = None,
+    max_wall_time: float | None = None,
+    no_progress_limit: float | None = None,
 ) -> RunResult:
     """Load the cell, load and start the program (a V+ file or a GPL project
     folder), simulate, report."""
@@ -98,20 +124,32 @@ def run_program(
     if not scene.exists():
         raise ProgramError(f"{scene}: no such scene file", file=str(scene))
 
-    sim = Simulation(scene, seed=seed)
-    sim.recorder = _open_recorder(sim, rrd_path)
+    sim = _load_cell(scene, seed)
     sandbox = _sandbox(program, report_path or rrd_path)
-    if program.is_dir():
-        system = _start_gpl(sim, program, main, console, sandbox)
-    else:
-        system = _start_vplus(sim, program, main, console, sandbox)
+    try:
+        check_root(sandbox)
+    except SandboxError as err:
+        raise ProgramError(f"sandbox folder {err}", file=str(sandbox)) from None
+    sim.recorder = _open_recorder(sim, rrd_path)
+    try:
+        if program.is_dir():
+            system = _start_gpl(sim, program, main, console, sandbox)
+        else:
+            system = _start_vplus(sim, program, main, console, sandbox)
 
-    if sim.recorder is not None:
-        sim.recorder.log_text(0.0, f"twin run {program} on {scene}")
-    outcome = sim.run(max_sim_time=max_sim_time)
-    if sim.recorder is not None:
-        sim.recorder.log_text(sim.cell.time, system.console.output or "(no output)")
-        sim.recorder.close()
+        if sim.recorder is not None:
+            sim.recorder.log_text(0.0, f"twin run {program} on {scene}")
+        if no_progress_limit is not None:  # the command line's, over the scene's; 0: none
+            sim.no_progress_s = no_progress_limit if no_progress_limit > 0 else None
+        outcome = sim.run(max_sim_time=max_sim_time, max_wall_time=max_wall_time)
+        if sim.recorder is not None:
+            sim.recorder.log_text(sim.cell.time, system.console.output or "(no output)")
+            sim.recorder.close()
+            replace_output(sim.recorder.path, rrd_path)
+    finally:
+        if sim.recorder is not None:
+            sim.recorder.close()
+            sim.recorder.path.unlink(missing_ok=True)  # gone when renamed; left by an error
 
     events = [{"time": e.get("t"), **{k: v for k, v in e.items() if k != "t"}} for e in sim.cell.events]
     report = Report(

@@ -17,10 +17,12 @@ from .controller.controller import COLLISION, MotionSettings, VirtualController
 from .controller.io import DigitalIO
 from .controller.location import Location
 from .controller.scheduler import Scheduler
+from .controller.watchdog import DEFAULT_NO_PROGRESS_S, Watchdog, WatchdogLimits, is_external, task_is_blocked
 from .errors import ProgramError
 from .physics.cell import Cell
 
 MAJOR_CYCLE_S = 0.016
+AT_REST_SPEED = 1e-3  # m/s or rad/s: a body slower than this is not moving (watchdog)
 REPO_ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_SCENE = REPO_ROOT / "scenes" / "scara_pick.toml"
 
@@ -53,16 +55,23 @@ class Simulation:
         self.recorder = recorder
         self._events_recorded = 0  # cell events already sent to the recorder
         self.settle_s = float(controller_cfg.get("settle_after_program_s", 3.0))
+        no_progress = float(controller_cfg.get("no_progress_s", DEFAULT_NO_PROGRESS_S))
+        self.no_progress_s: float | None = no_progress if no_progress > 0 else None
+        self.clock_reads = 0  # how often the programs read the time (watchdog: a wait may end)
+        self._events_watched = 0  # cell events the watchdog has seen
+
+    def clock(self) -> float:
+        self.clock_reads += 1
+        return self.cell.time
 
     def taught_locations(self) -> dict[str, Location]:
         return {name: Location(*values) for name, values in self.cell.locations().items()}
 
-    def clock(self) -> float:
-        return self.cell.time
-
-    def run(self, max_sim_time: float = 3600.0) -> RunOutcome:
-        """Run until every task has ended and the cell has settled."""
+    def run(self, max_sim_time: float = 3600.0, max_wall_time: float | None = None) -> RunOutcome:
+        """Run until every task has ended and the cell has settled, or a limit or the
+        watchdog stops it (docs/robustness.md, "Runaways")."""
         wall_start = time.perf_counter()
+        watchdog = Watchdog(WatchdogLimits(self.no_progress_s, max_wall_time))
         cell, controller, scheduler = self.cell, self.controller, self.scheduler
         steps = max(1, round(MAJOR_CYCLE_S / cell.timestep))
         errors: list[dict] = []
@@ -70,6 +79,7 @@ class Simulation:
         crashed = False
         while True:
             if program_end is None:
+                reads, alive = self.clock_reads, self._live_tasks()
                 scheduler.run_cycle()
                 for task in scheduler.tasks:
                     error = getattr(task, "error", None)
@@ -96,8 +106,31 @@ class Simulation:
                 error = self._stop_for_collision(collisions[0])
                 if error is not None:  # no program was running to take it
                     errors.append(error.as_dict(cell.time))
+            if program_end is None:
+                runaway = self._watch(watchdog, self.clock_reads == reads, alive)
+                if runaway is not None:
+                    controller.stop()
+                    errors.append(runaway.as_dict(cell.time))
+                    program_end = cell.time
+                    break
             self._record()
         return RunOutcome(cell.time, time.perf_counter() - wall_start, program_end, errors)
+
+    def _live_tasks(self) -> list:
+        return [t for t in self.scheduler.tasks if not t.finished and not getattr(t, "paused", False)]
+
+    def _watch(self, watchdog: Watchdog, no_clock_read: bool, alive_before: list):
+        """Tell the watchdog what this cycle changed (before `_record` drains the signal
+        changes); the error that ends the run, if it is a runaway."""
+        cell, live = self.cell, self._live_tasks()
+        self._events_watched, events_before = len(cell.events), self._events_watched
+        progressed = (bool(self.io.changes) or len(cell.events) != events_before or live != alive_before
+                      or float(abs(cell.data.qvel).max(initial=0.0)) > AT_REST_SPEED)
+        waits = [self.scheduler.waiting_on(task) for task in live]
+        external_wait = any(is_external(wait) for wait in waits)
+        blocked = (no_clock_read and not self.controller.moving and not external_wait
+                   and all(task_is_blocked(wait, task.SLICE) for wait, task in zip(waits, live)))
+        return watchdog.observe(cell.time, progressed, blocked, external_wait, live)
 
     def _record(self) -> None:
         """Once per major cycle: a recording frame when one is due, and the digital signals

@@ -70,6 +70,10 @@ class Scheduler:
             task.scheduler = self
         self.tasks.append(task)
 
+    def waiting_on(self, task: Runnable) -> Any:
+        """What `task` last yielded: a wait condition, a token, or None (not waiting)."""
+        return self._waits.get(id(task))
+
     @property
     def alive(self) -> bool:
         return any(not t.finished and not getattr(t, "paused", False) for t in self.tasks)
