@@ -364,6 +364,8 @@ def load_expect(path: str | Path) -> dict:
         raise ExpectError(f"{path}: cannot read: {e}") from None
     except tomllib.TOMLDecodeError as e:
         raise ExpectError(f"{path}: not valid TOML: {e}") from None
+    except UnicodeDecodeError as e:  # TOML is UTF-8 text
+        raise ExpectError(f"{path}: not valid TOML: not UTF-8 text ({e.reason} at byte {e.start})") from None
     try:
         _compile(data)
     except ExpectError as e:

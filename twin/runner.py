@@ -16,7 +16,8 @@ import uuid
 from dataclasses import dataclass
 from pathlib import Path
 
-from .errors import ProgramError
+from .errors import InputError, ProgramError
+from .language.gpl.errors import NO_START_PROCEDURE
 from .outputs import check_replaceable, replace_output, temporary_beside
 from .language.gpl.runtime import GplSystem
 from .language.vplus.runtime import Console, VPlusSystem
@@ -76,6 +77,8 @@ def _start_vplus(sim: Simulation, program: Path, main: str | None, console: Cons
     names = system.load(program)
     if not names:
         raise ProgramError(f"{program}: no .PROGRAM in file", file=str(program))
+    if main is not None and main.lower() not in (name.lower() for name in names):
+        raise InputError(f"--main {main}: {program} has no .PROGRAM {main} (it has {', '.join(names)})")
     sim.scheduler.add(system.start(main or names[0]))
     return system
 
@@ -87,7 +90,13 @@ def _start_gpl(sim: Simulation, project: Path, main: str | None, console: Consol
     system = GplSystem(sim.controller, sim.io, sim.clock, sim.scheduler, console=console, sandbox=sandbox,
                        seed=sim.cell.seed)
     system.load_project(project)
-    system.start(main)
+    try:
+        system.start(main)
+    except ProgramError as err:
+        if err.code != NO_START_PROCEDURE:
+            raise
+        what = f"--main {main}" if main is not None else f"{project / 'Project.gpr'}: ProjectStart"
+        raise InputError(f"{what}: {err.message} ({err.code})") from None
     return system
 
 
@@ -99,7 +108,7 @@ def _load_cell(scene: Path, seed: int | None) -> Simulation:
     except KeyError as err:
         raise ProgramError(f"{scene}: scene lacks the key {err}", file=str(scene)) from None
     except (ValueError, TypeError, IndexError, OSError) as err:
-        text = str(err) if str(err).startswith(str(scene)) else f"{scene}: {err}"
+        text = str(err).removeprefix(f"{scene}: ")
         raise ProgramError(text, file=str(scene)) from None
 
 
