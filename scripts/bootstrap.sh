@@ -10,6 +10,8 @@
 #   * .venv is created only when missing; pip is upgraded and the project installed
 #     only when pyproject.toml changed since the last install (its SHA-256 is kept in
 #     .venv/.twin-bootstrap-stamp) or `twin` cannot be imported.
+#   * the dependencies are pinned to the known-good set in constraints.txt (CI's);
+#     TWIN_NO_CONSTRAINTS=1 installs the newest versions pyproject.toml allows instead.
 # Environment: PYTHON (default python3) picks the interpreter for a new .venv;
 # TWIN_SKIP_APT=1 skips the Debian packages.
 set -euo pipefail
@@ -84,11 +86,13 @@ if [[ ! -x "$VENV/bin/python" ]]; then
     rm -f "$STAMP"
 fi
 
-hash="$(sha256sum "$ROOT/pyproject.toml" | cut -d' ' -f1)"
+hash="$(cat "$ROOT/pyproject.toml" "$ROOT/constraints.txt" | sha256sum | cut -d' ' -f1)"
+constraints=(-c "$ROOT/constraints.txt")
+[[ "${TWIN_NO_CONSTRAINTS:-0}" == 1 ]] && constraints=()
 if [[ ! -f "$STAMP" ]] || [[ "$(cat "$STAMP")" != "$hash" ]] \
         || ! "$VENV/bin/python" -c 'import twin' >/dev/null 2>&1; then
-    say "installing the project into $VENV (pyproject.toml changed or not installed yet)"
+    say "installing the project into $VENV (pyproject.toml or constraints.txt changed, or not installed yet)"
     "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check --upgrade pip
-    (cd "$ROOT" && "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -e '.[test]')
+    (cd "$ROOT" && "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check "${constraints[@]}" -e '.[test]')
     echo "$hash" > "$STAMP"
 fi

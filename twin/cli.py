@@ -3,6 +3,7 @@
     twin run PROGRAM|PROJECT_DIR [--scene SCENE] [--main NAME] [--report R.json] [--rrd R.rrd]
                      [--max-sim-time S] [--max-wall-time S] [--no-progress-limit S] [--seed N]
     twin check REPORT --expect EXPECT.toml [--junit FILE.xml]
+    twin serve PROGRAM|PROJECT_DIR [--scene SCENE] [--fast] [--viewer] [--report R.json] ...
 
 A user's mistake (bad syntax, an unreachable location, a missing file) is
 printed as the controller would print it, with file and line, and never as a
@@ -39,15 +40,20 @@ def non_negative_int(text: str) -> int:
     return value
 
 
-def positive_seconds(text: str) -> float:
+def positive_seconds(text: str, unit: str = " of seconds") -> float:
     """A time limit: a finite number of seconds > 0 (nan, inf, 0 and negatives refused)."""
     try:
         value = float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number{unit}") from None
     if not math.isfinite(value) or value <= 0:
-        raise argparse.ArgumentTypeError(f"{text} is not a finite number of seconds > 0")
+        raise argparse.ArgumentTypeError(f"{text} is not a finite number{unit} > 0")
     return value
+
+
+def positive_number(text: str) -> float:
+    """A ratio such as --speed: finite and > 0."""
+    return positive_seconds(text, unit="")
 
 
 def limit_seconds(text: str) -> float:
@@ -141,17 +147,21 @@ def check_distinct(outputs: dict[str, str]) -> None:
 def validate_run(args: argparse.Namespace) -> None:
     """Every file and argument of `twin run`, before anything is simulated."""
     from .controller.sandbox import SandboxError, check_root
+    from .resources import find_user_file
     from .runner import sandbox_root
     from .simulation import DEFAULT_SCENE
 
-    inputs = check_program(args.program)
-    inputs.append(check_input_file(args.scene if args.scene is not None else str(DEFAULT_SCENE), "scene"))
+    # As the runner finds them: the path as given, else the bundled file of that name.
+    program = str(find_user_file(args.program))
+    scene = str(find_user_file(args.scene)) if args.scene is not None else str(DEFAULT_SCENE)
+    inputs = check_program(program)
+    inputs.append(check_input_file(scene, "scene"))
     outputs = {what: path for what, path in (("report", args.report), ("recording", args.rrd)) if path}
     for what, path in outputs.items():
         check_output(path, what, inputs)
     check_distinct(outputs)
     if outputs:
-        root = sandbox_root(args.program, args.report or args.rrd)
+        root = sandbox_root(program, args.report or args.rrd)
         try:
             check_root(root)
         except SandboxError as err:
@@ -194,6 +204,23 @@ def _run(args: argparse.Namespace) -> int:
     return EXIT_PROGRAM_ERROR if report.errors else EXIT_OK
 
 
+def _serve(args: argparse.Namespace) -> int:
+    """Keep the cell running for client software (twin/serve.py)."""
+    from .serve import serve_program
+
+    validate_run(args)
+    try:
+        result = serve_program(args.program, scene=args.scene, main=args.main, report_path=args.report,
+                               rrd_path=args.rrd, viewer=args.viewer, fast=args.fast, speed=args.speed,
+                               seed=args.seed, max_sim_time=args.max_sim_time)
+    except ProgramError as err:
+        print(str(err), file=sys.stderr)
+        return 2 if err.code is None else 1
+    for error in result.report.errors:
+        print(ProgramError.from_dict(error), file=sys.stderr)
+    return 1 if result.report.errors else 0
+
+
 def _check(args: argparse.Namespace) -> int:
     from .check import main_check
 
@@ -225,6 +252,21 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--seed", type=non_negative_int, default=None, help="random seed (default: the scene's)")
     run.set_defaults(handler=_run)
 
+    serve = sub.add_parser("serve", help="keep a server program (V+ TCP server, GPL TCP Command Server) "
+                           "running on its cell for client software, in real time")
+    serve.add_argument("program", help="V+ program file or GPL project folder")
+    serve.add_argument("--scene", default=None, help="cell description (default: scenes/scara_pick.toml)")
+    serve.add_argument("--main", default=None, help="program to execute (as for twin run)")
+    serve.add_argument("--report", default=None, help="write the placement report (JSON) here at the end")
+    serve.add_argument("--rrd", default=None, help="also write a Rerun recording here")
+    serve.add_argument("--viewer", action="store_true", help="stream to a live Rerun viewer (spawned)")
+    serve.add_argument("--fast", action="store_true", help="run as fast as possible, not in real time")
+    serve.add_argument("--speed", type=positive_number, default=1.0,
+                       help="simulated seconds per wall second (default 1)")
+    serve.add_argument("--max-sim-time", type=float, default=float("inf"), help="stop after this many simulated seconds")
+    serve.add_argument("--seed", type=non_negative_int, default=None, help="random seed (default: the scene's)")
+    serve.set_defaults(handler=_serve)
+
     check = sub.add_parser("check", help="check a report against expectations")
     check.add_argument("report")
     check.add_argument("--expect", required=True)
@@ -233,9 +275,26 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv: list[str] | None = None) -> int:
+def _version() -> str:
+    """The installed distribution's version (the package's own when run from a checkout)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    from . import __version__
     try:
-        args = build_parser().parse_args(argv)
+        return version("twin")
+    except PackageNotFoundError:
+        return __version__
+
+
+def _add_global_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--version", action="version", version=f"twin {_version()}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    _add_global_options(parser)
+    try:
+        args = parser.parse_args(argv)
     except SystemExit as stop:  # argparse has printed the usage and what is wrong
         return EXIT_OK if stop.code in (0, None) else EXIT_INPUT_ERROR
     try:

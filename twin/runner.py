@@ -16,13 +16,14 @@ import uuid
 from dataclasses import dataclass
 from pathlib import Path
 
+from .controller.sandbox import SandboxError, check_root
 from .errors import InputError, ProgramError
 from .language.gpl.errors import NO_START_PROCEDURE
-from .outputs import check_replaceable, replace_output, temporary_beside
 from .language.gpl.runtime import GplSystem
 from .language.vplus.runtime import Console, VPlusSystem
+from .outputs import check_replaceable, replace_output, temporary_beside
 from .report import Report
-from .controller.sandbox import SandboxError, check_root
+from .resources import find_user_file
 from .simulation import DEFAULT_SCENE, Simulation
 
 
@@ -42,7 +43,7 @@ def cycle_times(events: list[dict]) -> list[float]:
 
 def _open_recorder(sim: Simulation, rrd_path: str | Path | None):
     """A recorder writing to a temporary file beside `rrd_path`, renamed over it when the
-    run is over (outputs.replace_output): an interrupted run leaves the old file alone."""
+    run is over (outputs.replace_output): a run that fails leaves the old file alone."""
     if rrd_path is None:
         return None
     from .recorder import Recorder
@@ -100,6 +101,18 @@ def _start_gpl(sim: Simulation, project: Path, main: str | None, console: Consol
     return system
 
 
+@dataclass
+class StartedRun:
+    """A cell with its program loaded and started, not yet simulated."""
+
+    program: Path
+    scene: Path
+    simulation: Simulation
+    system: VPlusSystem | GplSystem
+    report_path: str | Path | None
+    rrd_path: str | Path | None = None  # where the recording goes when the run is over
+
+
 def _load_cell(scene: Path, seed: int | None) -> Simulation:
     """The cell of `scene`; a scene the loader cannot use is the user's error (exit 2), with
     the loader's own words (a missing key, a wrong value, a broken model file)."""
@@ -125,11 +138,29 @@ def run_program(
     no_progress_limit: float | None = None,
 ) -> RunResult:
     """Load the cell, load and start the program (a V+ file or a GPL project
-    folder), simulate, report."""
-    program = Path(program)
+    folder), simulate, report.  `no_progress_limit` overrides the scene's
+    [controller] no_progress_s (0: no limit); see twin.controller.watchdog."""
+    started = start_program(program, scene, main, report_path, rrd_path, seed, console)
+    sim = started.simulation
+    if no_progress_limit is not None:
+        sim.no_progress_s = no_progress_limit if no_progress_limit > 0 else None
+    try:
+        outcome = sim.run(max_sim_time=max_sim_time, max_wall_time=max_wall_time)
+    except BaseException:
+        _discard_recording(started)
+        raise
+    return finish_run(started, outcome)
+
+
+def start_program(program: str | Path, scene: str | Path | None = None, main: str | None = None,
+                  report_path: str | Path | None = None, rrd_path: str | Path | None = None,
+                  seed: int | None = None, console: Console | None = None, recorder=None) -> StartedRun:
+    """Load the cell and the program and start it (`recorder`: one already made, as
+    `twin serve` makes for a live viewer)."""
+    program = find_user_file(program)   # as given, else the bundled file of that name
     if not program.exists():
         raise ProgramError(f"*Nonexistent file* {program}", file=str(program))
-    scene = Path(scene) if scene is not None else DEFAULT_SCENE
+    scene = find_user_file(scene) if scene is not None else DEFAULT_SCENE
     if not scene.exists():
         raise ProgramError(f"{scene}: no such scene file", file=str(scene))
 
@@ -139,26 +170,41 @@ def run_program(
         check_root(sandbox)
     except SandboxError as err:
         raise ProgramError(f"sandbox folder {err}", file=str(sandbox)) from None
-    sim.recorder = _open_recorder(sim, rrd_path)
+    own_recording = recorder is None and rrd_path is not None
+    sim.recorder = recorder(sim) if recorder is not None else _open_recorder(sim, rrd_path)
+    started = StartedRun(program, scene, sim, None, report_path, rrd_path if own_recording else None)
     try:
         if program.is_dir():
-            system = _start_gpl(sim, program, main, console, sandbox)
+            started.system = _start_gpl(sim, program, main, console, sandbox)
         else:
-            system = _start_vplus(sim, program, main, console, sandbox)
+            started.system = _start_vplus(sim, program, main, console, sandbox)
+    except BaseException:
+        _discard_recording(started)
+        raise
+    if sim.recorder is not None:
+        sim.recorder.log_text(0.0, f"twin run {program} on {scene}")
+    return started
 
-        if sim.recorder is not None:
-            sim.recorder.log_text(0.0, f"twin run {program} on {scene}")
-        if no_progress_limit is not None:  # the command line's, over the scene's; 0: none
-            sim.no_progress_s = no_progress_limit if no_progress_limit > 0 else None
-        outcome = sim.run(max_sim_time=max_sim_time, max_wall_time=max_wall_time)
-        if sim.recorder is not None:
-            sim.recorder.log_text(sim.cell.time, system.console.output or "(no output)")
-            sim.recorder.close()
-            replace_output(sim.recorder.path, rrd_path)
-    finally:
-        if sim.recorder is not None:
-            sim.recorder.close()
-            sim.recorder.path.unlink(missing_ok=True)  # gone when renamed; left by an error
+
+def _discard_recording(started: StartedRun) -> None:
+    """A run that fails before its end leaves no temporary recording behind."""
+    recorder = started.simulation.recorder
+    if started.rrd_path is not None and recorder is not None:
+        recorder.close()
+        recorder.path.unlink(missing_ok=True)
+
+
+def finish_run(started: StartedRun, outcome) -> RunResult:
+    """Close the recording, build the report (and write it when asked)."""
+    sim, system, program, scene, report_path = (started.simulation, started.system, started.program,
+                                                started.scene, started.report_path)
+    if isinstance(system, VPlusSystem):
+        system.devices.close_network()  # a run stopped early still frees its ports
+    if sim.recorder is not None:
+        sim.recorder.log_text(sim.cell.time, system.console.output or "(no output)")
+        sim.recorder.close()
+        if started.rrd_path is not None:
+            replace_output(sim.recorder.path, started.rrd_path)
 
     events = [{"time": e.get("t"), **{k: v for k, v in e.items() if k != "t"}} for e in sim.cell.events]
     report = Report(

@@ -12,6 +12,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Callable
 
 from .controller.controller import COLLISION, MotionSettings, VirtualController
 from .controller.io import DigitalIO
@@ -20,11 +21,11 @@ from .controller.scheduler import Scheduler
 from .controller.watchdog import DEFAULT_NO_PROGRESS_S, Watchdog, WatchdogLimits, is_external, task_is_blocked
 from .errors import ProgramError
 from .physics.cell import Cell
+from .resources import bundled
 
 MAJOR_CYCLE_S = 0.016
 AT_REST_SPEED = 1e-3  # m/s or rad/s: a body slower than this is not moving (watchdog)
-REPO_ROOT = Path(__file__).resolve().parent.parent
-DEFAULT_SCENE = REPO_ROOT / "scenes" / "scara_pick.toml"
+DEFAULT_SCENE = bundled("scenes/scara_pick.toml")
 
 
 @dataclass
@@ -67,9 +68,11 @@ class Simulation:
     def taught_locations(self) -> dict[str, Location]:
         return {name: Location(*values) for name, values in self.cell.locations().items()}
 
-    def run(self, max_sim_time: float = 3600.0, max_wall_time: float | None = None) -> RunOutcome:
-        """Run until every task has ended and the cell has settled, or a limit or the
-        watchdog stops it (docs/robustness.md, "Runaways")."""
+    def run(self, max_sim_time: float = 3600.0, on_cycle: Callable[[], bool] | None = None,
+            max_wall_time: float | None = None) -> RunOutcome:
+        """Run until every task has ended and the cell has settled, or until `on_cycle`,
+        called after every major cycle (`twin serve` paces and stops with it), says stop,
+        or a limit or the watchdog stops it (docs/robustness.md, "Runaways")."""
         wall_start = time.perf_counter()
         watchdog = Watchdog(WatchdogLimits(self.no_progress_s, max_wall_time))
         cell, controller, scheduler = self.cell, self.controller, self.scheduler
@@ -114,6 +117,9 @@ class Simulation:
                     program_end = cell.time
                     break
             self._record()
+            if on_cycle is not None and on_cycle():
+                program_end = program_end if program_end is not None else cell.time
+                break
         return RunOutcome(cell.time, time.perf_counter() - wall_start, program_end, errors)
 
     def _live_tasks(self) -> list:

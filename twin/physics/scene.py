@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
-import tomllib
+import sys
 from pathlib import Path
 
-REPO_ROOT = Path(__file__).resolve().parents[2]
+from ..resources import resource_root
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # Python 3.10: the same parser, as a package
+    import tomli as tomllib
 
 REQUIRED = ("robot", "gripper", "table", "feeder", "conveyor", "bin", "part", "regions", "locations")
 
@@ -26,9 +31,10 @@ def load_scene(path: str | Path) -> dict:
 
 
 def resolve(path: str, scene_path: Path) -> Path:
-    """Model paths in a scene are relative to the scene file or to the repository."""
-    for base in (Path(scene_path).parent, REPO_ROOT):
+    """Model paths in a scene are relative to the scene file or to twin's bundled
+    resources (models/ in the repository or in the installed package)."""
+    for base in (Path(scene_path).parent, resource_root()):
         candidate = (base / path).resolve()
         if candidate.exists():
             return candidate
-    raise FileNotFoundError(f"{path}: not found next to {scene_path} nor in {REPO_ROOT}")
+    raise FileNotFoundError(f"{path}: not found next to {scene_path} nor in {resource_root()}")

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import re
 from functools import lru_cache
+from importlib.resources import files
 from pathlib import Path
 
 from lark import Lark, Token, Transformer, v_args
@@ -22,7 +23,7 @@ from .errors import SYNTAX_ERROR, message
 
 @lru_cache(maxsize=1)
 def _parser() -> Lark:
-    grammar = (Path(__file__).parent / "gpl.lark").read_text()
+    grammar = files(__package__).joinpath("gpl.lark").read_text()  # packaged beside this module
     return Lark(grammar, parser="lalr", lexer="contextual", propagate_positions=True, maybe_placeholders=True)
 
 

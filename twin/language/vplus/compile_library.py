@@ -50,6 +50,9 @@ class LibraryStatements:
         unit_var = s.unit[0] if s.unit and isinstance(s.unit[0], ast.Var) else None
         if spec.returns_unit and unit_var is not None:
             unit[0] = self.peek(unit_var)
+        handle_var = s.unit[1] if spec.writes_back and len(s.unit) > 1 and isinstance(s.unit[1], ast.Var) else None
+        if handle_var is not None:
+            unit[1] = self.peek(handle_var)
         if spec.targets:
             if not all(isinstance(item, ast.Var) for item in s.items):
                 raise self.error(s, msg.INVALID_ARGUMENT, f"{s.name} needs variables")
@@ -63,6 +66,9 @@ class LibraryStatements:
             for i, item in enumerate(s.items):
                 self.emit(depth, f"if {result}[{i}] is not None:")
                 self.assign(item, f"{result}[{i}]", depth + 1)
+        if handle_var is not None:
+            self.emit(depth, f"if {result}[-1] is not None:")
+            self.assign(handle_var, f"{result}[-1]", depth + 1)
         if spec.returns_unit and unit_var is not None:
             self.emit(depth, f"if {result} is not None:")
             self.assign(unit_var, result, depth + 1)

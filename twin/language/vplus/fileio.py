@@ -13,6 +13,7 @@ Control"; eV+ guide, same chapter).
 * SERIAL:n: an in-memory line a test or scene feeds (`SerialLine.feed`) and
   reads back (`SerialLine.sent`).
 * TERMINAL (logical unit 4): the system console.
+* TCP: a network server or client on loopback (tcp.py), opened with FOPEN.
 * The pendant (unit 1), graphics windows (20-23), and any other device are
   absent, as on a controller without that hardware: ATTACH reports
   *Device not ready* through IOSTAT and the program goes on.
@@ -27,11 +28,15 @@ import fnmatch
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 from ...controller.sandbox import Sandbox, SandboxError
+from ...controller.scheduler import NETWORK_CYCLE
 from . import messages as msg
 from .values import to_int
+
+if TYPE_CHECKING:
+    from .tcp import TcpEndpoint
 
 TERMINAL_LUN = 4
 DISK_LUNS = range(5, 15)  # handed out by ATTACH (lun, 4) "DISK"
@@ -109,15 +114,17 @@ class Unit:
     device: str  # DISK, SERIAL:n, TERMINAL
     serial: SerialLine | None = None
     file: OpenFile | None = None
+    tcp: TcpEndpoint | None = None
 
 
 class Devices:
     """Every task's logical units, the disk sandbox and the serial lines."""
 
-    def __init__(self, sandbox: Path | None, console):
+    def __init__(self, sandbox: Path | None, console, clock: Callable[[], float] = lambda: 0.0):
         self.sandbox = Path(sandbox) if sandbox is not None else None
         self.box = Sandbox(sandbox) if sandbox is not None else None
         self.console = console
+        self.clock = clock  # simulated time: the network is polled once per instant
         self.serial_lines: dict[int, SerialLine] = {}
         self.units: dict[tuple[int, int], Unit] = {}
         self.status: dict[tuple[int, int], int] = {}
@@ -156,7 +163,7 @@ class Devices:
 
     # ------------------------------------------------------------ attach
     def free_lun(self, task: int, device: str) -> int:
-        pool = DISK_LUNS if device == "DISK" else SERIAL_LUNS if device.startswith("SERIAL") else GRAPHICS_LUNS
+        pool = DISK_LUNS if device in ("DISK", "TCP") else SERIAL_LUNS if device.startswith("SERIAL") else GRAPHICS_LUNS
         for lun in pool:
             if (task, lun) not in self.units:
                 return lun
@@ -171,6 +178,10 @@ class Devices:
             self.units[(task, lun)] = Unit("DISK")
         elif device == "TERMINAL":
             self.units[(task, lun)] = Unit("TERMINAL")
+        elif device == "TCP":
+            from .tcp import TcpEndpoint
+
+            self.units[(task, lun)] = Unit("TCP", tcp=TcpEndpoint(self.clock))
         elif (match := re.fullmatch(r"SERIAL:([1-9][0-9]?)", device)) is not None:
             line = self.serial(int(match[1]))
             if line.owner is not None and line.owner != task:
@@ -188,11 +199,19 @@ class Devices:
         if unit.serial is not None:
             unit.serial.owner = None
             unit.serial.listener = None
+        if unit.tcp is not None:
+            unit.tcp.close()
 
     def release_task(self, task: int) -> None:
         """A program that ends normally has its units detached and files closed."""
         for key in [k for k in self.units if k[0] == task]:
             self.detach(*key)
+
+    def close_network(self) -> None:
+        """The run is over: every TCP unit stops listening and drops its clients."""
+        for unit in self.units.values():
+            if unit.tcp is not None:
+                unit.tcp.close()
 
     # ------------------------------------------------------------ disk files
     def disk_path(self, spec: str, wildcards: bool = False) -> Path:
@@ -251,8 +270,38 @@ class Devices:
             handle.position = len(handle.data)
         unit.file = handle
 
+    def open_network(self, task: int, lun: int, spec: str) -> None:
+        """FOPEN on a TCP unit: a server (/LOCAL_PORT) or a client (/REMOTE_PORT)."""
+        unit = self.unit(task, lun)
+        if unit.tcp is None:
+            raise IoError(msg.ILLEGAL_IO_COMMAND)  # graphics windows are absent
+        if unit.tcp.opened:
+            raise IoError(msg.FILE_ALREADY_OPEN)
+        unit.tcp.open(spec)
+
+    def read_network(self, task: int, lun: int, wait: bool) -> tuple[str, int] | None:
+        """READ on a TCP unit: (bytes, handle), IOSTAT 1, 100 or 101 (tcp.py); None
+        while nothing has arrived and the READ waits."""
+        unit = self.unit(task, lun)
+        try:
+            outcome = unit.tcp.read()
+            if outcome is None and not wait:
+                raise IoError(msg.NO_DATA)
+        except IoError as err:
+            self.status[(task, lun)] = err.code
+            return "", 0
+        if outcome is None:
+            return None
+        status, handle, data = outcome
+        self.status[(task, lun)] = status
+        self.last_length[(task, lun)] = len(data)
+        return data.decode("latin-1"), handle
+
     def fclose(self, task: int, lun: int) -> None:
         unit = self.unit(task, lun)
+        if unit.tcp is not None:
+            unit.tcp.close()
+            return
         if unit.file is None:
             raise IoError(msg.FILE_NOT_OPEN)
         unit.file = None
@@ -290,6 +339,8 @@ class Devices:
             self.console.write(text + ("\n" if newline else ""))
         elif unit.serial is not None:
             unit.serial.sent += data + (b"\r\n" if newline else b"")
+        elif unit.tcp is not None:
+            unit.tcp.write(record, data + (b"\r\n" if newline else b""))
         else:
             self._write_file(task, lun, data, newline, record)
         self.last_length[(task, lun)] = len(data)
@@ -361,6 +412,8 @@ class Devices:
         unit = self.units.get((rt.number, to_int(lun)))
         while unit is not None and unit.serial is not None and not (unit.serial.received or unit.serial.errors):
             yield rt.SLICE
+        while unit is not None and unit.tcp is not None and not unit.tcp.has_byte():
+            yield NETWORK_CYCLE  # the network is polled once per cycle
 
     def getc(self, task: int, lun: int) -> int:
         """GETC: the next byte, CR, LF and Ctrl-Z included, or a negative error code."""
@@ -372,6 +425,10 @@ class Devices:
                     # No-wait mode, or a GETC whose step could not wait first.
                     raise IoError(msg.NO_DATA)
                 byte = unit.serial.received.pop(0)
+            elif unit.tcp is not None:
+                byte = unit.tcp.getc()
+                if byte is None:
+                    raise IoError(msg.NO_DATA)
             elif unit.device == "TERMINAL":
                 if not self.typed:
                     line = self.console.read_line()  # the terminal hands over whole lines

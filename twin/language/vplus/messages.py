@@ -51,6 +51,9 @@ FILE_NOT_OPEN = -514  # twin-chosen
 NOT_ATTACHED = -516  # twin-chosen
 ALREADY_ATTACHED = -517  # twin-chosen
 INVALID_FILE_SPEC = -518  # twin-chosen
+# The TCP device (tcp.py): a connection the peer closed, an address the twin will not reach.
+NETWORK_CLOSED = -562  # twin-chosen
+NETWORK_REFUSED = -563  # twin-defined: the twin talks to loopback only
 # A number typed at a PROMPT (texts printed in [000] L10362-10368 for pendant input).
 INVALID_NUMBER = -455  # twin-chosen
 UNEXPECTED_TEXT = -456  # twin-chosen
@@ -100,6 +103,8 @@ MESSAGES: dict[int, str] = {
     NOT_ATTACHED: "*Not attached to logical unit*",
     ALREADY_ATTACHED: "*Logical unit already attached*",
     INVALID_FILE_SPEC: "*Invalid file specification*",
+    NETWORK_CLOSED: "*Network connection closed*",
+    NETWORK_REFUSED: "*Network address not allowed*",
     INVALID_NUMBER: "*Invalid number format*",
     UNEXPECTED_TEXT: "*Unexpected text at end of line*",
 }

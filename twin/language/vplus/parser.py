@@ -9,6 +9,7 @@ column and offending text, and the V+ message.
 from __future__ import annotations
 
 from functools import lru_cache
+from importlib.resources import files
 from pathlib import Path
 
 from lark import Lark, Token, Transformer_NonRecursive, v_args
@@ -25,7 +26,7 @@ MAX_LABEL = 65535  # step labels are integers 0 to 65535 ([000] L805-808)
 
 @lru_cache(maxsize=1)
 def _parser() -> Lark:
-    grammar = (Path(__file__).parent / "vplus.lark").read_text()
+    grammar = files(__package__).joinpath("vplus.lark").read_text()  # packaged beside this module
     return Lark(grammar, parser="lalr", lexer="contextual", propagate_positions=True, maybe_placeholders=True)
 
 

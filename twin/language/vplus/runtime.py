@@ -104,7 +104,7 @@ class VPlusSystem:
         self.dialect = "eV+"
         self.sources: dict[str, list[str]] = {}  # file -> its lines, for error messages
         # Logical units; disk files live in `sandbox` (no disk when it is None).
-        self.devices = Devices(sandbox, self.console)
+        self.devices = Devices(sandbox, self.console, clock)
         self.timers: dict[int, float] = {}  # TIMER n = value: the clock reading that timer n counts from
 
     # ------------------------------------------------------------ loading

@@ -18,6 +18,8 @@ from . import shared
 DEVICE_FULL = (-323, "Device full")  # manual L2992
 XML_ERROR = (-799, "XML error")  # manual L3725
 NO_XML_NODE = (-801, "No XML node")  # manual L3731
+UNDEFINED_DATAID = (-501, "Undefined DataID")  # PreciseFlex (parameter database range), unverified
+READ_ONLY_DATAID = (-502, "DataID is read-only")  # PreciseFlex (parameter database range), unverified
 INVALID_ROBOT = (-1000, "Invalid robot number")  # PreciseFlex
 ROBOT_ALREADY_ATTACHED = (-1006, "Robot already attached")  # PreciseFlex
 NO_ROBOT_ATTACHED = (-1009, "No robot attached")  # PreciseFlex

@@ -27,6 +27,7 @@ import ipaddress
 import select
 import socket
 
+from ....controller.network import listening_ports
 from . import codes
 from . import byref, gpl_class
 from .members import stored
@@ -257,6 +258,7 @@ class TcpListener:
             raise _socket_error(err) from None
         sock.setblocking(False)
         self._sock = sock
+        listening_ports.add(sock.getsockname()[1])
 
     def _s(self) -> socket.socket:
         if self._sock is None:
@@ -281,6 +283,7 @@ class TcpListener:
 
     def Stop(self) -> None:
         if self._sock is not None:
+            listening_ports.discard(self._sock.getsockname()[1])
             self._sock.close()
             self._sock = None
 

@@ -9,12 +9,13 @@ reason; docs/gpl.md lists how each member is treated.
 
 from __future__ import annotations
 
-from ....controller.location import NULL
+from ....controller.location import trans
 from . import codes
-from . import Ref, byref, gpl_class, shared
+from . import Ref, byref, gpl_class, pdb, shared
+from .args import flag, number
 from .locations import GplLocation, location_arg
 from .motion import GplProfile, destination_joints
-from .state import check_robot, robot_state, to_gpl_angles, tool_pose
+from .state import check_robot, config_of, robot_state, to_gpl_angles, tool_pose
 
 # Controller.PowerState values (twin-defined: the manual does not list the sequence's states).
 POWER_STATE_OFF, POWER_STATE_ON = 0, 20
@@ -67,6 +68,12 @@ class Robot:
         state.homed = True
 
     @shared
+    def Homed(rt, robot=1) -> bool:
+        """Whether the robot has been homed since the controller started."""
+        check_robot(robot)
+        return robot_state(rt).homed
+
+    @shared
     def HomeAll(rt) -> None:
         state = robot_state(rt)
         if not state.power:
@@ -77,7 +84,10 @@ class Robot:
     def Where(rt, robot=1) -> GplLocation:
         """Current Cartesian position, from the measured joints (Base and Tool applied)."""
         check_robot(robot)
-        return GplLocation.cartesian(rt, tool_pose(rt, rt.robot.joints()))
+        q = rt.robot.joints()
+        where = GplLocation.cartesian(rt, tool_pose(rt, q))
+        where.Config = config_of(rt, q)
+        return where
 
     @shared
     def WhereAngles(rt, robot=1) -> GplLocation:
@@ -130,10 +140,15 @@ class Robot:
 
     @shared
     def RestartBase(rt, robot=1) -> GplLocation:
+        """The Base set when the controller starts: DataID 16052 "Base set at restart"."""
         check_robot(robot)
-        return GplLocation.cartesian(rt, NULL)
+        return GplLocation.cartesian(rt, trans(*pdb.database(rt).of(rt, 16052)[1]))
 
-    RestartTool = RestartBase
+    @shared
+    def RestartTool(rt, robot=1) -> GplLocation:
+        """The Tool set when the controller starts: DataID 16051 "Tool set at restart"."""
+        check_robot(robot)
+        return GplLocation.cartesian(rt, trans(*pdb.database(rt).of(rt, 16051)[1]))
 
     @shared
     def LastProfile(rt, robot=1) -> GplProfile:
@@ -183,15 +198,24 @@ class Controller:
     """The global Controller class."""
 
     @shared
-    def PowerEnabled(rt) -> bool:
+    def PowerEnabled(rt, timeout=0) -> bool:
+        """Whether high power is on (`timeout` only matters when setting it)."""
+        number(timeout)
         return robot_state(rt).power
 
     @shared
-    def set_PowerEnabled(rt, value) -> None:
-        """Power comes on at once in the twin (no amplifier sequence); turning it off stops
-        any motion."""
+    def set_PowerEnabled(rt, *timeout_and_value) -> None:
+        """`Controller.PowerEnabled = v` or `Controller.PowerEnabled(timeout) = v` (GPL
+        Dictionary: timeout in seconds to wait for the power sequence).  Power comes on at
+        once in the twin (no amplifier sequence), so the timeout never expires; turning
+        it off stops any motion."""
+        if not 1 <= len(timeout_and_value) <= 2:
+            raise codes.fail(codes.INVALID_ARGUMENT, "PowerEnabled takes one index, the timeout")
+        *timeout, value = timeout_and_value
+        if timeout:
+            number(timeout[0])
         state = robot_state(rt)
-        state.power = bool(value)
+        state.power = flag(value)
         if not state.power:
             rt.robot.stop()
 
@@ -268,10 +292,27 @@ class Controller:
     def set_RecordButton(rt, value) -> None:
         """Clearing the latched flag is accepted; there is no pendant to set it."""
 
+    @shared
+    def PDb(rt, dataid, unit=1, unit2=1, array_index=0, key=0) -> str:
+        """A parameter database value as a String (array_index 0: every value, comma separated)."""
+        return pdb.read(rt, dataid, unit, unit2, array_index, numeric=False)
+
+    @shared
+    def set_PDb(rt, dataid, *rest) -> None:
+        """Controller.PDb(dataid[, unit[, unit2[, array_index[, key]]]]) = String."""
+        pdb.assign(rt, dataid, rest, numeric=False)
+
+    @shared
+    def PDbNum(rt, dataid, unit=1, unit2=1, array_index=1, key=0) -> float:
+        """A numeric parameter database value (array_index 1: the first one)."""
+        return pdb.read(rt, dataid, unit, unit2, array_index, numeric=True)
+
+    @shared
+    def set_PDbNum(rt, dataid, *rest) -> None:
+        pdb.assign(rt, dataid, rest, numeric=True)
+
     Command = codes.unsupported("Controller.Command", "console commands")
     ErrorLog = codes.unsupported("Controller.ErrorLog", "the system error log")
     Load = codes.unsupported("Controller.Load", "one project per run")
     Unload = codes.unsupported("Controller.Unload", "one project per run")
-    PDb = codes.unsupported("Controller.PDb", "the parameter database")
-    PDbNum = codes.unsupported("Controller.PDbNum", "the parameter database")
 

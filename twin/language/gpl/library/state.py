@@ -48,6 +48,7 @@ class RobotState:
     events: dict = field(default_factory=dict)  # pending Thread events by thread handle
     threads: dict = field(default_factory=dict)  # Thread object by thread handle
     nvram: dict = field(default_factory=dict)  # /NVRAM files: name -> NvramFile
+    pdb: Any = None  # the parameter database (pdb.Database), made at first use
 
 
 _STATES: "weakref.WeakKeyDictionary[Any, RobotState]" = weakref.WeakKeyDictionary()
@@ -108,6 +109,14 @@ def matrix_m(pose: Location) -> np.ndarray:
     T = pose.matrix()
     T[:3, 3] /= MM
     return T
+
+
+def config_of(rt, q: np.ndarray) -> int:
+    """The Config bits of the arm configuration at joints q (Table 4-4): GPL_Righty or
+    GPL_Lefty for a SCARA arm, none for a robot without an elbow configuration."""
+    if rt.robot.kin.scara is None:
+        return 0
+    return GPL_RIGHTY if rt.robot.kin.is_righty(q) else GPL_LEFTY
 
 
 def righty_of(config: int) -> bool | None:

@@ -36,6 +36,9 @@ class InstructionSpec:
     # positions are arrays, passed as (array, index), and the plain variables before "="
     # get what the instruction returns at their position (a tuple, None: unchanged).
     array_values: tuple[int, ...] = ()
+    # Keyed: the plain variables among the arguments get what the instruction returns at
+    # their position.  I/O (READ (lun, handle)): a variable second unit argument gets the
+    # last value the instruction returns (None: unchanged).
     writes_back: bool = False
 
 

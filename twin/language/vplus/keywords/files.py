@@ -9,6 +9,7 @@ IOSTAT(lun); an I/O error never stops the program.
 from __future__ import annotations
 
 from .. import messages as msg
+from ....controller.scheduler import NETWORK_CYCLE
 from ..fileio import RETURN_LUN, TERMINAL_LUN, IoError
 from ..formats import render
 from ..values import MAX_STRING, _str, fail, to_int
@@ -16,6 +17,7 @@ from . import function, instruction
 from .strings import leading_number
 
 ROBOT_LUN = 0
+NO_WAIT = 1  # READ mode bit
 
 
 def _arg(unit: tuple, i: int, default: int = 0) -> int:
@@ -131,6 +133,14 @@ def _refuse(rt, unit: tuple, items: tuple):
 instruction("FCMND")(_refuse)
 
 
+@instruction("FOPEN")
+def _fopen(rt, unit: tuple, items: tuple):
+    """FOPEN (lun, mode) "/LOCAL_PORT n /CLIENTS n /BUFFER_SIZE n" on a TCP unit
+    (../tcp.py); graphics windows, the other use of FOPEN, are absent."""
+    devices = _devices(rt)
+    devices.run(rt.number, _arg(unit, 0), devices.open_network, _str(items[0]) if items else "")
+
+
 @instruction("WRITE")
 def _write(rt, unit: tuple, items: tuple):
     """WRITE (lun, record) items: formatted like TYPE; CR LF ends the record unless /S."""
@@ -139,15 +149,36 @@ def _write(rt, unit: tuple, items: tuple):
     devices.run(rt.number, _arg(unit, 0), devices.write, text, newline, _arg(unit, 1))
 
 
-@instruction("READ", waits=True, targets=True)
+@instruction("READ", waits=True, targets=True, writes_back=True)
 def _read(rt, unit: tuple, kinds: tuple):
     """READ (lun, record) var, ...: one record.  A single variable takes the
     whole record (a real its leading number, as VAL reads it; a string its
     first 128 characters); several take the record's comma- or space-separated
     fields in order.  A serial READ waits for a whole line; after an error the
-    variables keep their values."""
+    variables keep their values.  On a TCP unit, READ (lun, handle, mode) takes
+    the bytes that have arrived and sets `handle` (../tcp.py).  The last value
+    returned is for `handle` (None: unchanged)."""
     devices = _devices(rt)
     lun, record = _arg(unit, 0), _arg(unit, 1)
+    attached = devices.units.get((rt.number, lun))
+    if attached is not None and attached.tcp is not None:
+        values = yield from _read_network(rt, devices, lun, _arg(unit, 2), kinds)
+        return values
+    values = yield from _read_record(rt, devices, lun, record, kinds)
+    return values + [None]
+
+
+def _read_network(rt, devices, lun: int, mode: int, kinds: tuple):
+    while (outcome := devices.read_network(rt.number, lun, wait=not mode & NO_WAIT)) is None:
+        yield NETWORK_CYCLE  # the network is polled once per cycle
+    text, handle = outcome
+    if devices.iostat(rt.number, lun) < 0:
+        return [None] * len(kinds) + [None]
+    fields = [text] if len(kinds) == 1 else _fields(text, len(kinds))
+    return [f if kind == "s" else leading_number(f) for kind, f in zip(kinds, fields)] + [float(handle)]
+
+
+def _read_record(rt, devices, lun: int, record: int, kinds: tuple):
     while True:
         text = devices.run(rt.number, lun, devices.read_record, record)
         if text is not None or devices.iostat(rt.number, lun) < 0:
@@ -192,7 +223,7 @@ def _pendant(rt, select):
 # GETEVENT) act on units ATTACH could never open, so they report
 # *Not attached to logical unit* through IOSTAT; external encoders (SETDEVICE)
 # are absent.
-for _name in ("FOPEN", "GARC", "GCHAIN", "GCLEAR", "GCLIP", "GCOLOR", "GCOPY", "GFLOOD", "GICON", "GLINE",
+for _name in ("GARC", "GCHAIN", "GCLEAR", "GCLIP", "GCOLOR", "GCOPY", "GFLOOD", "GICON", "GLINE",
               "GLINES", "GLOGICAL", "GPANEL", "GPOINT", "GRECTANGLE", "GSCAN", "GSLIDE", "GTEXTURE", "GTRANS",
               "GTYPE"):
     instruction(_name)(_refuse)

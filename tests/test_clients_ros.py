@@ -1,0 +1,189 @@
+"""programs/vplus/ros_server.pg, the ROS-Industrial simple_message server, driven by a
+client written from the protocol description (big-endian int32 / float32 fields:
+length, message type, comm type, reply code, body).
+
+The server runs in this process on the SCARA cell (as fast as it goes); the client
+runs in a thread.  Measured joint positions are taken between major cycles, when
+the client has had its reply and the robot is at rest.
+"""
+
+from __future__ import annotations
+
+import math
+import queue
+import socket
+import struct
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from twin.runner import finish_run, start_program
+
+MOTION_PORT, STATE_PORT = 11000, 11002
+JOINT_POSITION, JOINT_TRAJ_PT, STATUS = 10, 11, 13
+TOPIC, REQUEST, REPLY = 1, 2, 3
+SUCCESS = 1
+TARGETS = [  # rad, rad, m, rad (the Cobra's J3 is the quill, in metres for ROS)
+    [0.3, 0.5, 0.015, 0.2],
+    [-0.4, 1.0, 0.03, -1.0],
+    [0.0, -0.8, 0.02, 3.0],
+    [1.2, -1.5, 0.005, -2.5],
+    [-1.0, 2.2, 0.0, 0.0],
+]
+
+
+def connect(port: int) -> socket.socket:
+    for _ in range(1000):
+        try:
+            return socket.create_connection(("127.0.0.1", port), timeout=30)
+        except OSError:
+            time.sleep(0.01)
+    raise RuntimeError(f"nothing listens on {port}")
+
+
+def receive(sock: socket.socket, count: int) -> bytes:
+    data = b""
+    while len(data) < count:
+        chunk = sock.recv(count - len(data))
+        if not chunk:
+            raise ConnectionError("closed")
+        data += chunk
+    return data
+
+
+def receive_message(sock: socket.socket) -> tuple[int, int, int, bytes]:
+    (length,) = struct.unpack(">i", receive(sock, 4))
+    data = receive(sock, length)
+    kind, comm, code = struct.unpack(">iii", data[:12])
+    return kind, comm, code, data[12:]
+
+
+def trajectory_point(sequence: int, joints: list[float], velocity: float = 0.5) -> bytes:
+    body = struct.pack(">i10fff", sequence, *(joints + [0.0] * (10 - len(joints))), velocity, 0.0)
+    message = struct.pack(">iii", JOINT_TRAJ_PT, REQUEST, 0) + body
+    return struct.pack(">i", len(message)) + message
+
+
+class Feedback:
+    """Reads the state port in its own thread: the latest joints and status, counted."""
+
+    def __init__(self, sock: socket.socket):
+        self.sock, self.count, self.joints, self.status = sock, 0, None, None
+        self.lock = threading.Condition()
+        threading.Thread(target=self._read, daemon=True).start()
+
+    def _read(self) -> None:
+        try:
+            while True:
+                kind, comm, _, body = receive_message(self.sock)
+                assert comm == TOPIC
+                with self.lock:
+                    if kind == JOINT_POSITION:
+                        self.joints = struct.unpack(">i10f", body)[1:]
+                    elif kind == STATUS:
+                        self.status = struct.unpack(">7i", body)
+                        self.count += 1
+                    self.lock.notify_all()
+        except (ConnectionError, OSError):
+            pass
+
+    def after(self, count: int) -> tuple[tuple, tuple]:
+        """The joints and status of a pair sent after `count` pairs had arrived."""
+        with self.lock:
+            assert self.lock.wait_for(lambda: self.count >= count + 2, timeout=30)
+            return self.joints, self.status
+
+
+class Run:
+    """The server on the SCARA cell; `client(run)` in a thread; measured joints on request."""
+
+    def __init__(self, client):
+        self.requests: queue.Queue = queue.Queue()
+        self.done = threading.Event()
+        self.failure: BaseException | None = None
+        self.started = start_program("programs/vplus/ros_server.pg")
+
+        def body():
+            try:
+                client(self)
+            except BaseException as err:  # reported by the test, not lost in the thread
+                self.failure = err
+            finally:
+                self.done.set()
+
+        thread = threading.Thread(target=body, daemon=True)
+        thread.start()
+        outcome = self.started.simulation.run(max_sim_time=600.0, on_cycle=self._between_cycles)
+        thread.join(10)
+        self.result = finish_run(self.started, outcome)
+        if self.failure is not None:
+            raise self.failure
+        assert self.result.report.errors == []
+
+    def _between_cycles(self) -> bool:
+        while not self.requests.empty():
+            answer = self.requests.get()
+            answer.put(self.started.simulation.cell.robot_qpos().copy())
+        return self.done.is_set()
+
+    def measured(self) -> np.ndarray:
+        answer: queue.Queue = queue.Queue()
+        self.requests.put(answer)
+        return answer.get(timeout=30)
+
+
+def test_every_commanded_joint_target_is_reached_and_fed_back():
+    log = []
+
+    def client(run: Run):
+        motion, state = connect(MOTION_PORT), connect(STATE_PORT)
+        feedback = Feedback(state)
+        for k, target in enumerate(TARGETS):
+            motion.sendall(trajectory_point(k, target))
+            kind, comm, code, body = receive_message(motion)
+            measured = run.measured()
+            joints, status = feedback.after(feedback.count)
+            log.append((target, (kind, comm, code, struct.unpack(">i", body[:4])[0]), measured, joints, status))
+        motion.close()
+        state.close()
+
+    run = Run(client)
+    assert run.result.report.errors == []
+    assert len(log) == len(TARGETS)
+    for k, (target, reply, measured, joints, status) in enumerate(log):
+        assert reply == (JOINT_TRAJ_PT, REPLY, SUCCESS, k)
+        error = np.abs(measured - np.array(target))
+        assert np.degrees(error[[0, 1, 3]]).max() < 0.01, (k, np.degrees(error))
+        assert error[2] * 1000 < 0.01  # mm on the quill
+        assert np.abs(np.array(joints[:4]) - measured).max() < 2e-5  # float32 of the same joints
+        assert joints[4:] == (0.0,) * 6
+        drives, estop, code, in_error, in_motion, mode, possible = status
+        assert (drives, estop, code, in_error, in_motion, mode, possible) == (1, 0, 0, 0, 0, 2, 1)
+    worst = max(np.degrees(np.abs(m - np.array(t))[[0, 1, 3]]).max() for t, _, m, _, _ in log)
+    print(f"worst joint-target error {worst:.5f} deg")
+
+
+def test_a_client_that_leaves_mid_message_leaves_the_server_serving_the_next():
+    target = [0.5, -0.5, 0.01, 1.0]
+    replies = []
+
+    def client(run: Run):
+        first = connect(MOTION_PORT)
+        first.sendall(trajectory_point(0, [1.0, 1.0, 0.1, 1.0])[:30])
+        first.close()
+        second = connect(MOTION_PORT)
+        second.sendall(trajectory_point(7, target))
+        replies.append(receive_message(second))
+        replies.append(run.measured())
+        second.close()
+
+    run = Run(client)
+    (kind, comm, code, body), measured = replies
+    assert (kind, comm, code, struct.unpack(">i", body[:4])[0]) == (JOINT_TRAJ_PT, REPLY, SUCCESS, 7)
+    assert np.degrees(np.abs(measured - target)[[0, 1, 3]]).max() < 0.01
+    output = run.result.report.output
+    assert "client left (30 bytes of a message dropped)" in output
+    assert output.count("client connected") == 2
+    assert run.result.report.errors == []

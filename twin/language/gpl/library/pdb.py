@@ -1,0 +1,167 @@
+"""The configuration parameter database as GPL sees it: ``Controller.PDb`` (any value,
+as a String) and ``Controller.PDbNum`` (numeric values, as a Double).
+
+Signatures (GPL Dictionary, Controller.PDb / Controller.PDbNum):
+``PDb(dataid, unit, unit2, array_index, key)``: unit and unit2 default to 1;
+array_index defaults to 0 for PDb (all the values, comma separated) and to 1 for
+PDbNum (the first value); key (protection override) is accepted and ignored.
+
+Only the DataIDs below exist in the twin; any other one is the controller's
+error for an undefined DataID.  Each entry says where its number comes from
+(the User Manual's lines, or the public Parameter Database reference).  The
+robot entries (2000-3999, 16000-17999) belong to robot `unit`: the twin has
+robot 1 only.  docs/gpl.md lists them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+from . import codes
+from .args import integer, number, text
+from .state import check_robot, robot_state
+
+READ_ONLY, READ_WRITE = True, False
+
+
+@dataclass(frozen=True)
+class Entry:
+    label: str
+    kind: str  # "num", "int", "bool" or "str"
+    count: int  # values in the array (1: a scalar)
+    default: Callable[[Any], list]  # rt -> the values at boot
+    read_only: bool = False
+    robot: bool = False  # a robot parameter (unit = robot number)
+
+
+def _const(*values) -> Callable[[Any], list]:
+    return lambda rt: list(values)
+
+
+def _axes(rt) -> int:
+    return rt.robot.kin.dof
+
+
+def _soft_limits(which: int) -> Callable[[Any], list]:
+    """Joint soft limits in GPL units (degrees, mm) from the robot model."""
+    def limits(rt) -> list:
+        from .state import to_gpl_angles  # noqa: PLC0415 - state imports numpy arrays of the model
+        kin = rt.robot.kin
+        return to_gpl_angles(rt, kin.upper if which > 0 else kin.lower)
+    return limits
+
+
+# DataID -> entry.  Sources: "manual Lnnn" (gpl-user-manual.txt), "PDB" (the public Parameter
+# Database reference, www2.brooksautomation.com/Controller_Software/Software_Reference/PDB),
+# "Dictionary" (the GPL Dictionary page of Controller.PDb).
+TABLE: dict[int, Entry] = {
+    100: Entry("Controller manufacturer", "str", 1, _const("Brooks Automation"), READ_ONLY),  # PDB
+    101: Entry("Controller model", "str", 1, _const("twin"), READ_ONLY),  # PDB
+    103: Entry("Full software version", "str", 1, _const("GPL 4.2 (twin digital twin)"), READ_ONLY),  # PDB
+    104: Entry("Software version", "int", 1, _const(4), READ_ONLY),  # PDB
+    125: Entry("Serial console enable", "bool", 1, _const(True)),  # manual L2859
+    323: Entry("Error log file", "str", 1, _const("")),  # manual L3018
+    424: Entry("Vision server IP address", "str", 1, _const("127.0.0.1")),  # manual L3094
+    601: Entry("Test speed", "num", 1, _const(10.0)),  # Dictionary ("test speed" is 601)
+    **{i: Entry(f"GPL program variable {i - 1849}", "num", 1, _const(0.0)) for i in range(1850, 1870)},  # Dictionary
+    1892: Entry("GPL program NVRAM variable array", "int", 8, _const(*[0] * 8)),  # manual L3034
+    2000: Entry("Number of axes", "int", 1, lambda rt: [_axes(rt)], READ_ONLY, robot=True),  # PDB
+    2002: Entry("Robot Name", "str", 1, _const("Robot 1"), robot=True),  # PDB
+    2003: Entry("Axis Mask", "int", 1, lambda rt: [(1 << _axes(rt)) - 1], READ_ONLY, robot=True),  # PDB
+    16000: Entry("Robot serial number", "str", 1, _const("TWIN-0001"), robot=True),  # PDB
+    16051: Entry("Tool set at restart", "num", 6, _const(*[0.0] * 6), robot=True),  # PDB
+    16052: Entry("Base set at restart", "num", 6, _const(*[0.0] * 6), robot=True),  # PDB
+    16077: Entry("Joint maximum soft stop limits", "num", 0, _soft_limits(+1), READ_ONLY, robot=True),  # Dictionary
+}
+
+_CONVERT = {"num": number, "int": integer, "bool": lambda v: number(v) != 0, "str": text}
+
+
+@dataclass
+class Database:
+    """The values of one run's controller, made from TABLE's defaults at first use."""
+
+    values: dict[int, list] = field(default_factory=dict)
+
+    def of(self, rt, dataid: int) -> tuple[Entry, list]:
+        entry = TABLE.get(dataid)
+        if entry is None:
+            raise codes.fail(codes.UNDEFINED_DATAID, str(dataid))
+        if dataid not in self.values:
+            self.values[dataid] = list(entry.default(rt))
+        return entry, self.values[dataid]
+
+
+def database(rt) -> Database:
+    state = robot_state(rt)
+    if state.pdb is None:
+        state.pdb = Database()
+    return state.pdb
+
+
+def _lookup(rt, dataid, unit, unit2) -> tuple[Entry, list]:
+    dataid, unit, unit2 = integer(dataid), integer(unit), integer(unit2)
+    entry, values = database(rt).of(rt, dataid)
+    if entry.robot:
+        check_robot(unit)
+    elif unit != 1:
+        raise codes.fail(codes.INVALID_ARGUMENT, f"DataID {dataid} has unit 1 only, not {unit}")
+    if unit2 != 1:
+        raise codes.fail(codes.INVALID_ARGUMENT, f"DataID {dataid}: sub unit {unit2}")
+    return entry, values
+
+
+def _element(dataid: int, values: list, index: int) -> int:
+    if not 1 <= index <= len(values):
+        raise codes.fail(codes.INVALID_ARGUMENT, f"DataID {dataid} has {len(values)} value(s), not index {index}")
+    return index - 1
+
+
+def _shown(entry: Entry, value) -> str:
+    if entry.kind == "bool":
+        return "1" if value else "0"
+    if entry.kind == "num":
+        from ..values import format_value  # noqa: PLC0415 - the interpreter's number format
+        return format_value(float(value))
+    return str(value)
+
+
+def read(rt, dataid, unit, unit2, index, numeric: bool):
+    entry, values = _lookup(rt, dataid, unit, unit2)
+    index = integer(index)
+    if numeric and entry.kind == "str":
+        raise codes.fail(codes.INVALID_ARGUMENT, f"DataID {integer(dataid)} ({entry.label}) is not numeric")
+    if index == 0 and not numeric:
+        return ",".join(_shown(entry, v) for v in values)
+    value = values[_element(integer(dataid), values, index)]
+    if numeric:
+        return float(value)
+    return _shown(entry, value)
+
+
+def write(rt, dataid, unit, unit2, index, value, numeric: bool) -> None:
+    entry, values = _lookup(rt, dataid, unit, unit2)
+    dataid, index = integer(dataid), integer(index)
+    if entry.read_only:
+        raise codes.fail(codes.READ_ONLY_DATAID, f"{dataid} ({entry.label})")
+    if numeric and entry.kind == "str":
+        raise codes.fail(codes.INVALID_ARGUMENT, f"DataID {dataid} ({entry.label}) is not numeric")
+    convert = _CONVERT[entry.kind]
+    if index == 0:  # PDb with every value: a comma separated list
+        items = text(value).split(",") if entry.count != 1 else [value]
+        if len(items) != len(values):
+            raise codes.fail(codes.INVALID_ARGUMENT, f"DataID {dataid} takes {len(values)} value(s)")
+        values[:] = [convert(v.strip() if isinstance(v, str) and entry.kind != "str" else v) for v in items]
+        return
+    values[_element(dataid, values, index)] = convert(value)
+
+
+def assign(rt, dataid, rest: tuple, numeric: bool) -> None:
+    """`Controller.PDb(dataid, [unit, [unit2, [array_index, [key]]]]) = value`: `rest` is
+    the indices after dataid, then the value."""
+    if not 1 <= len(rest) <= 5:
+        raise codes.fail(codes.INVALID_ARGUMENT, "PDb takes dataid, unit, unit2, array_index, key")
+    *given, value = rest
+    unit, unit2, index = given[:3] + [1, 1, 1 if numeric else 0][len(given[:3]):]
+    write(rt, dataid, unit, unit2, index, value, numeric)
