@@ -37,7 +37,11 @@ def v_plus(system):
 
 
 def error_of(body: str, **kw) -> ProgramError:
-    _system, task = run_vplus(program(body), **kw)
+    """The error the program stops with, at load time or when it runs."""
+    try:
+        _system, task = run_vplus(program(body), **kw)
+    except ProgramError as err:
+        return err
     assert task.error is not None, "the program should have stopped with an error"
     return task.error
 
@@ -394,7 +398,8 @@ def test_terminal_unit_writes_to_the_console():
 
 
 def test_unknown_argument_types_stop_the_program():
-    assert error_of('x = LEN(5)').code == msg.WRONG_TYPE
+    assert error_of('x = LEN(5)').code == msg.WRONG_TYPE  # at load time: a constant
+    assert error_of('n = 5\nx = LEN(n)').code == msg.WRONG_TYPE  # when it runs
     assert error_of('x = IOSTAT("a")').code == msg.WRONG_TYPE
     assert math.isclose(run_ok("x = VAL(\"1e3\")").globals["x"], 1000.0)
 

@@ -157,7 +157,7 @@ count = 1000
 
 
 def test_task_states_pause_proceed_and_abort():
-    """TASK(1, n): 1 running, 2 paused, 0 idle; PAUSE waits for PROCEED
+    """TASK(1, n): 4 executing, 2 paused, 0 idle; PAUSE waits for PROCEED
     ([000] L4584-4590); ABORT stops a task ([000] L4455-4470)."""
     text = program("""
 EXECUTE 1 pauser()
@@ -191,7 +191,7 @@ UNTIL FALSE
 
     system, task = run_vplus(text, each_cycle=each_cycle)
     assert task.error is None
-    assert system.console.output == "paused: 2\nresumed: 1\naborted: 0\n"
+    assert system.console.output == "paused: 2\nresumed: 4\naborted: 0\n"
     assert system.task(2).finished and system.task(2).error is None
 
 
@@ -485,7 +485,7 @@ def test_task_0_attaches_the_robot_at_its_first_motion_in_ev_plus_at_its_start_i
     """eV+ [001] L416: task 0 attaches the robot "as soon as a motion related
     keyword is encountered"; V+ [000] L896-897: when task 0 begins.  Before
     that, another task may ATTACH it."""
-    text = program("EXECUTE 1 taker()\nWAIT TASK(1, 1) <> 1", name="main") + program("ATTACH ()", name="taker")
+    text = program("EXECUTE 1 taker()\nWAIT TASK(1, 1) <> 4", name="main") + program("ATTACH ()", name="taker")
 
     def setup(system):
         system.dialect = dialect

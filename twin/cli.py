@@ -152,9 +152,13 @@ def validate_run(args: argparse.Namespace) -> None:
     from .simulation import DEFAULT_SCENE
 
     # As the runner finds them: the path as given, else the bundled file of that name.
-    program = str(find_user_file(args.program))
+    given = args.program if isinstance(args.program, list) else [args.program]
+    programs = [str(find_user_file(p)) for p in given]
+    program = programs[0]
     scene = str(find_user_file(args.scene)) if args.scene is not None else str(DEFAULT_SCENE)
-    inputs = check_program(program)
+    inputs = [path for p in programs for path in check_program(p)]
+    if len(programs) > 1 and any(Path(p).is_dir() for p in programs):
+        raise InputError(f"program {program}: a GPL project folder is run alone, not with other files")
     inputs.append(check_input_file(scene, "scene"))
     outputs = {what: path for what, path in (("report", args.report), ("recording", args.rrd)) if path}
     for what, path in outputs.items():
@@ -236,7 +240,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
 
     run = sub.add_parser("run", help="run a V+ program or a GPL project on a cell")
-    run.add_argument("program", help="V+ program file (.pg, .v2) or GPL project folder (with Project.gpr)")
+    run.add_argument("program", nargs="+", help="V+ program files (.pg, .v2; loaded together, the first "
+                     "file's first program starts) or a GPL project folder (with Project.gpr)")
     run.add_argument("--scene", default=None, help="cell description (default: scenes/scara_pick.toml)")
     run.add_argument("--main", default=None, help="program to execute (default: the first .PROGRAM; "
                      "GPL: the start procedure of Project.gpr)")

@@ -69,17 +69,19 @@ def sandbox_root(program: str | Path, output: str | Path) -> Path:
     return Path(output).resolve().parent / f"{Path(program).stem}-files"
 
 
-def _start_vplus(sim: Simulation, program: Path, main: str | None, console: Console | None,
+def _start_vplus(sim: Simulation, programs: list[Path], main: str | None, console: Console | None,
                  sandbox: Path) -> VPlusSystem:
+    """Load every V+ file (LOAD of several modules); the first file's first program starts."""
     system = VPlusSystem(sim.controller, sim.io, sim.clock, console=console, seed=sim.cell.seed,
                          sandbox=sandbox)
     for name, location in sim.taught_locations().items():
         system.define_location(name, location)
-    names = system.load(program)
-    if not names:
-        raise ProgramError(f"{program}: no .PROGRAM in file", file=str(program))
-    if main is not None and main.lower() not in (name.lower() for name in names):
-        raise InputError(f"--main {main}: {program} has no .PROGRAM {main} (it has {', '.join(names)})")
+    names = system.load_files(programs)
+    if not names and main is None:
+        raise ProgramError(f"{programs[0]}: no .PROGRAM in file", file=str(programs[0]))
+    if main is not None and main.lower() not in (name.lower() for name in system.programs):
+        raise InputError(f"--main {main}: no .PROGRAM {main} in {', '.join(map(str, programs))} "
+                         f"(programs: {', '.join(names) or 'none'})")
     sim.scheduler.add(system.start(main or names[0]))
     return system
 
@@ -126,7 +128,7 @@ def _load_cell(scene: Path, seed: int | None) -> Simulation:
 
 
 def run_program(
-    program: str | Path,
+    program: str | Path | list[str | Path],
     scene: str | Path | None = None,
     main: str | None = None,
     report_path: str | Path | None = None,
@@ -138,8 +140,9 @@ def run_program(
     no_progress_limit: float | None = None,
 ) -> RunResult:
     """Load the cell, load and start the program (a V+ file or a GPL project
-    folder), simulate, report.  `no_progress_limit` overrides the scene's
-    [controller] no_progress_s (0: no limit); see twin.controller.watchdog."""
+    folder, or several V+ files loaded together), simulate, report.  `no_progress_limit`
+    overrides the scene's [controller] no_progress_s (0: no limit); see
+    twin.controller.watchdog."""
     started = start_program(program, scene, main, report_path, rrd_path, seed, console)
     sim = started.simulation
     if no_progress_limit is not None:
@@ -152,14 +155,19 @@ def run_program(
     return finish_run(started, outcome)
 
 
-def start_program(program: str | Path, scene: str | Path | None = None, main: str | None = None,
+def start_program(program: str | Path | list[str | Path], scene: str | Path | None = None, main: str | None = None,
                   report_path: str | Path | None = None, rrd_path: str | Path | None = None,
                   seed: int | None = None, console: Console | None = None, recorder=None) -> StartedRun:
     """Load the cell and the program and start it (`recorder`: one already made, as
     `twin serve` makes for a live viewer)."""
-    program = find_user_file(program)   # as given, else the bundled file of that name
-    if not program.exists():
-        raise ProgramError(f"*Nonexistent file* {program}", file=str(program))
+    # as given, else the bundled file of that name; several V+ files are loaded together
+    programs = [find_user_file(p) for p in ([program] if isinstance(program, (str, Path)) else program)]
+    program = programs[0]
+    for path in programs:
+        if not path.exists():
+            raise ProgramError(f"*Nonexistent file* {path}", file=str(path))
+    if program.is_dir() and len(programs) > 1:
+        raise ProgramError(f"{program}: a GPL project folder is run alone", file=str(program))
     scene = find_user_file(scene) if scene is not None else DEFAULT_SCENE
     if not scene.exists():
         raise ProgramError(f"{scene}: no such scene file", file=str(scene))
@@ -177,7 +185,7 @@ def start_program(program: str | Path, scene: str | Path | None = None, main: st
         if program.is_dir():
             started.system = _start_gpl(sim, program, main, console, sandbox)
         else:
-            started.system = _start_vplus(sim, program, main, console, sandbox)
+            started.system = _start_vplus(sim, programs, main, console, sandbox)
     except BaseException:
         _discard_recording(started)
         raise

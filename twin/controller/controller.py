@@ -47,6 +47,7 @@ COARSE_FACTOR = 5.0  # COARSE tolerance / FINE tolerance (SPEC: "normally 2 to 1
 TRAJECTORY_CYCLE_S = 0.016  # V+ trajectory generator period (62.5 Hz, V+ guide v17 "Timing Considerations")
 PLAN_CACHE = 64  # planned trajectories kept for reuse
 DURATION_BISECTIONS = 12  # speed factor for DURATION to 1/4096: the last 0.1 % is a uniform stretch
+MAX_DWELL_S = 1e12  # DELAY longer than this (30,000 years) waits this long: any run ends first
 MM = 1000.0
 MM_PER_INCH = 25.4
 CONFIG_RIGHTY = 1  # CONFIG() bits: RIGHTY (else LEFTY); BELOW = 2 and FLIP = 4 never apply here
@@ -155,8 +156,12 @@ class _Motion:
                  destination: Location, hand: str | None):
         _, self.q, self.qd = trajectory.sample(dt)
         self.dt = dt
-        self.delta = self.q - self.q[0]  # what this motion adds to the reference
-        self.qdd = self._acceleration()
+        self.still = isinstance(trajectory, _Still)
+        if self.still:  # DELAY: read-only views of one row, O(1) memory however long it lasts
+            self.delta = self.qdd = self.qd
+        else:
+            self.delta = self.q - self.q[0]  # what this motion adds to the reference
+            self.qdd = self._acceleration()
         self.last = len(self.q) - 1  # index of the last sample
         self.params = params
         self.destination = destination
@@ -175,6 +180,11 @@ class _Motion:
         deceleration time: the robot stops on the same path (unless it arrives first).  A
         motion within `slack` steps of its deceleration is left to finish."""
         last = len(self.q) - 1
+        if self.still:  # standing still: the motion simply ends at sample k
+            self.q, self.qd = self.q[:k + 1], self.qd[:k + 1]
+            self.delta = self.qdd = self.qd
+            self.last = len(self.q) - 1
+            return
         steps = max(self.decel_steps, 1)
         if k >= last - self.decel_steps - slack:
             return
@@ -684,9 +694,17 @@ def _slowed_down(plan, seconds: float) -> Trajectory:
 
 
 class _Still(Trajectory):
-    """DELAY: standing still at q for `seconds`."""
+    """DELAY: standing still at q for `seconds` (at most MAX_DWELL_S: longer than any run)."""
 
     def __init__(self, q: np.ndarray, seconds: float):
         q = np.array(q, dtype=float)
         z = np.zeros(1)
-        super().__init__(float(seconds), q, q.copy(), np.array([0.0, seconds]), z, z, np.zeros(1))
+        seconds = min(float(seconds), MAX_DWELL_S)
+        super().__init__(seconds, q, q.copy(), np.array([0.0, seconds]), z, z, np.zeros(1))
+
+    def sample(self, dt: float) -> tuple[None, np.ndarray, np.ndarray]:
+        """The samples as read-only broadcast views of one row: a DELAY of a day costs no
+        more memory than one of a millisecond."""
+        n = int(math.ceil(self.duration / dt - 1e-9)) + 1
+        shape = (n, len(self.q_start))
+        return None, np.broadcast_to(self.q_start, shape), np.broadcast_to(np.zeros(shape[1]), shape)

@@ -104,6 +104,7 @@ class Declare(Statement):
     scope: str  # AUTO, LOCAL, GLOBAL
     double: bool
     names: list[tuple[Var, list[Expr] | None]]  # (variable, declared dimensions)
+    kind: str | None = None  # REAL, DOUBLE, LOC, or None when no type is written
 
 
 @dataclass
@@ -175,6 +176,7 @@ class Instruction(Statement):
     name: str  # upper case
     args: list[Expr | None]
     always: bool = False  # ended with ALWAYS: DURATION 0.5 ALWAYS, CPON ALWAYS
+    profile: "Expr | None" = None  # ACCEL (profile) accel, decel: the parenthesised argument
 
 
 # Block statements, as built by structure.py.

@@ -20,11 +20,14 @@ import dataclasses
 
 from . import ast
 from . import messages as msg
-from .keywords import INSTRUCTIONS, NAME_ARGUMENTS, WRITES_FIRST_ARGUMENT, arity
+from .keywords import INSTRUCTIONS, NAME_ARGUMENTS, WRITES_FIRST_ARGUMENT, argument_check, arity
 
 FORMAT_ARGUMENTS = {"$ENCODE"}  # arguments are TYPE items: expressions and /I0, /F8.3 ...
 ARRAY_ARGUMENTS = {"$UNPACK", "SOLVE.FLAGS"}  # the first argument a[i] (a[]) is passed as (array, index)
 FORMAT_CODES = set("SCXBUNDFEGHOI")  # formats.py renders each of them
+# Field widths and repeat counts (/I10, /C2, /X40) at most this: wider than any terminal
+# line or record (the guides set no number; a larger one is a load-time *Syntax error*).
+MAX_FORMAT_WIDTH = 255
 LIBRARY_CALLS = WRITES_FIRST_ARGUMENT | NAME_ARGUMENTS | FORMAT_ARGUMENTS | ARRAY_ARGUMENTS
 
 
@@ -78,6 +81,8 @@ class LibraryStatements:
         if isinstance(item, ast.Format):
             if item.code not in FORMAT_CODES:
                 raise self.error(self.current, msg.SYNTAX_ERROR, f"unknown format /{item.code}")
+            if max(item.width or 0, item.decimals or 0) > MAX_FORMAT_WIDTH:
+                raise self.error(self.current, msg.SYNTAX_ERROR, f"format width above {MAX_FORMAT_WIDTH}")
             return f"_fmt({item.code!r}, {item.width!r}, {item.decimals!r})"
         return self.expr(item)
 
@@ -95,7 +100,7 @@ class LibraryStatements:
                     raise self.error(s, msg.INVALID_ARGUMENT, f"{s.name} needs an array")
                 passed.append(self.array_ref(v))
             else:
-                passed.append(self.expr(v))
+                passed.append(self.checked(v, argument_check(spec.function, i), s.name))
         writes = []  # (position, variable) of the plain variables the instruction sets
         for i, a in enumerate(s.args):
             if a is None:
@@ -108,7 +113,7 @@ class LibraryStatements:
                 passed.append(self.peek(a))
                 writes.append((i, a))
             else:
-                passed.append(self.expr(a))
+                passed.append(self.checked(a, argument_check(spec.function, len(passed)), s.name))
         call = f"I[{s.name!r}](rt{''.join(', ' + a for a in passed)})"
         if not writes:
             self.emit(depth, call)

@@ -41,7 +41,7 @@ from ...errors import ProgramError
 from . import ast
 from . import messages as msg
 from .compile_library import LIBRARY_CALLS, LibraryStatements
-from .keywords import FUNCTIONS, INSTRUCTIONS, STRING_FUNCTIONS, arity, called_bare
+from .keywords import FUNCTIONS, INSTRUCTIONS, STRING_FUNCTIONS, argument_check, arity, called_bare
 from .values import single
 from .parser import normalize_name
 
@@ -70,6 +70,9 @@ _FLOW = {"RETURN", "RETURNE", "EXIT", "NEXT", "STOP", "HALT"}
 # Instructions the compiler carries out itself (besides the keyword table).
 _INSTRUCTION_NAMES = {*_FLOW, *_TASK_INSTRUCTIONS, "WAIT", "REACT", "REACTI", "REACTE"}
 
+# What each argument check expects, for the load-time message.
+_EXPECTED = {"_real": "a real value", "_location": "a location", "_point": "a location", "_str": "a string"}
+
 _RELATIONAL = {"==": "==", "<>": "!=", "<": "<", "<=": "<=", ">": ">", ">=": ">="}
 _ARITH = {"+": "+", "-": "-", "*": "*", "/": "/"}
 
@@ -90,6 +93,7 @@ class CompiledProgram:
     params: list[ast.Var]
     function: object = None  # the generator function, set by the loader
     statement_count: int = 0
+    frame_bytes: int = 20  # stack bytes of a call besides its arguments: 20 and the AUTO variables
 
 
 def is_string(expr: ast.Expr) -> bool:
@@ -161,6 +165,7 @@ class _Scope:
     auto: set[str] = field(default_factory=set)  # names kept as Python locals
     local: set[str] = field(default_factory=set)  # names kept in L
     doubles: set[str] = field(default_factory=set)
+    types: dict[str, str] = field(default_factory=dict)  # declared REAL (REAL, DOUBLE) or LOC
 
 
 class ProgramCompiler(LibraryStatements):
@@ -229,7 +234,24 @@ class ProgramCompiler(LibraryStatements):
             self.block(p.body, 1)
             self.emit_return(1)
         return CompiledProgram(p.name, "\n".join(self.lines) + "\n", self.line_map, p.file, p.params,
-                               statement_count=self.count)
+                               statement_count=self.count, frame_bytes=20 + self.auto_bytes(p.body))
+
+    def auto_bytes(self, body: list[ast.Statement]) -> int:
+        """Stack bytes of the AUTO variables ([000] "Stack Space Required by a Subroutine"):
+        a real 4, a DOUBLE 8, a LOC 48 (a precision point 4 per joint, 6 here), a string 132,
+        an array that many times its elements (constant sizes; others count one element)."""
+        total = 0
+        for statement in body:
+            if not isinstance(statement, ast.Declare) or statement.scope != "AUTO":
+                continue
+            for var, dims in statement.names:
+                prefix = var.name[0]
+                size = (132 if prefix == "$" else 24 if prefix == "#" else 8 if statement.double
+                        else 48 if statement.kind == "LOC" else 4)
+                for d in dims or []:
+                    size *= int(d.value) + 1 if isinstance(d, ast.Num) and 0 <= d.value < 1e9 else 1
+                total += size
+        return total
 
     def collect_declarations(self, body: list[ast.Statement]) -> None:
         # Declarations come before any executable step: only comments, blank
@@ -250,6 +272,22 @@ class ProgramCompiler(LibraryStatements):
                         self.scope.local.add(key)
                     if statement.double:
                         self.scope.doubles.add(key)
+                    if statement.kind is not None:
+                        self.declare_type(var, key, statement)
+
+    def declare_type(self, var: ast.Var, key: str, statement: ast.Declare) -> None:
+        """AUTO REAL x, AUTO LOC spot: a string cannot be typed, a precision point (#) is a
+        LOC; the type then holds for the variable in this program."""
+        prefix = var.name[0]
+        if prefix == "$" or (prefix == "#" and statement.kind != "LOC"):
+            raise self.error(statement, msg.WRONG_TYPE, f"{var.name} cannot be {statement.kind}")
+        self.scope.types[key] = "LOC" if statement.kind == "LOC" else "REAL"
+
+    def check_kind(self, target: ast.Var, kind: str) -> None:
+        """Assigning a real (=) to a LOC variable, or a location (SET) to a REAL or DOUBLE one."""
+        declared = self.scope.types.get(self.key(target))
+        if declared is not None and declared != kind:
+            raise self.error(self.current, msg.WRONG_TYPE, f"{target.name} is declared {declared}")
 
     def emit_return(self, depth: int) -> None:
         if not self.program.params:
@@ -340,8 +378,7 @@ class ProgramCompiler(LibraryStatements):
         if isinstance(e, ast.Call):
             return self.call(e)
         if isinstance(e, ast.ByCall):
-            args = ", ".join(self.expr(a) for a in [e.subject, *e.args])
-            return f"F[{e.name!r}](rt, {args})"
+            return f"F[{e.name!r}](rt, {self.checked_arguments(e.name, FUNCTIONS[e.name], [e.subject, *e.args])})"
         if isinstance(e, ast.Compound):
             return f"_compound({self.expr(e.left)}, {self.expr(e.right)})"
         if isinstance(e, ast.Unary):
@@ -408,8 +445,27 @@ class ProgramCompiler(LibraryStatements):
             raise self.error(self.current, msg.UNDEFINED_PROGRAM, e.name)
         fewest, most = arity(table[e.name])
         self.argument_count(e.name, e.args, fewest, most)
-        args = ", ".join("None" if a is None else self.expr(a) for a in e.args)
+        args = self.checked_arguments(e.name, table[e.name], e.args)
         return f"F[{e.name!r}](rt{', ' if args else ''}{args})"
+
+    def checked(self, arg: ast.Expr | None, check: str | None, name: str) -> str:
+        """An argument with the check its parameter's kind asks for (keywords/__init__.py):
+        a string constant or $ expression where another kind belongs, or a number where a
+        string belongs, is a load-time *Wrong data type*; a real constant needs no check."""
+        if arg is None:
+            return "None"
+        if check is None:
+            return self.expr(arg)
+        text = is_string(arg)
+        if (check == "_str") != text and (text or isinstance(arg, ast.Num)):
+            raise self.error(self.current, msg.WRONG_TYPE,
+                             f"{name}: {'a string' if text else 'a number'} where {_EXPECTED[check]} belongs")
+        if (check == "_real" and isinstance(arg, ast.Num)) or (check == "_str" and isinstance(arg, ast.Str)):
+            return self.expr(arg)
+        return f"{check}({self.expr(arg)})"
+
+    def checked_arguments(self, name: str, function, args: list) -> str:
+        return ", ".join(self.checked(a, argument_check(function, i), name) for i, a in enumerate(args))
 
     def defined(self, e: ast.Call) -> str:
         if len(e.args) != 1 or not isinstance(e.args[0], ast.Var):
@@ -449,6 +505,7 @@ class ProgramCompiler(LibraryStatements):
         self.emit(depth + 1, "yield from rt.trap(_error)")
 
     def s_Assign(self, s: ast.Assign, depth: int) -> None:
+        self.check_kind(s.target, "REAL")
         if s.target.name.startswith("$") != is_string(s.value) and not isinstance(s.value, ast.Call):
             raise self.error(s, msg.WRONG_TYPE)
         value = self.expr(s.value)
@@ -464,9 +521,10 @@ class ProgramCompiler(LibraryStatements):
         """The Python expression that stores `value` into a real variable:
         DOUBLE variables keep 64 bits, the others are single precision."""
         key = self.key(target)
-        return f"_real({value})" if key in self.scope.doubles else f"_single({value})"
+        return f"_double({value})" if key in self.scope.doubles else f"_single({value})"
 
     def s_SetLocation(self, s: ast.SetLocation, depth: int) -> None:
+        self.check_kind(s.target, "LOC")
         check = "_precision_point" if s.target.name.startswith("#") else "_location"
         self.assign(s.target, f"{check}({self.expr(s.value)})", depth)
 
@@ -824,12 +882,12 @@ class ProgramCompiler(LibraryStatements):
             self.assign(target, self.real(target, f"{numbers}[{i}]"), depth + 1)
 
     def s_Parameter(self, s: ast.Parameter, depth: int) -> None:
-        index = self.expr(s.index) if s.index is not None else "None"
-        self.emit(depth, f"rt.set_parameter({s.name!r}, {index}, {self.expr(s.value)})")
+        index, value = self.checked(s.index, "_real", "PARAMETER"), self.checked(s.value, "_real", "PARAMETER")
+        self.emit(depth, f"rt.set_parameter({s.name!r}, {index}, {value})")
 
     def s_Speed(self, s: ast.Speed, depth: int) -> None:
-        rotation = self.expr(s.rotation) if s.rotation is not None else "None"
-        self.emit(depth, f"rt.set_speed({self.expr(s.value)}, {rotation}, {tuple(s.modifiers)!r})")
+        value, rotation = self.checked(s.value, "_real", "SPEED"), self.checked(s.rotation, "_real", "SPEED")
+        self.emit(depth, f"rt.set_speed({value}, {rotation}, {tuple(s.modifiers)!r})")
 
     def argument_count(self, name: str, args: list, fewest: int, most: int) -> None:
         if not fewest <= len(args) <= most or any(a is None for a in args[:fewest]):
@@ -875,9 +933,12 @@ class ProgramCompiler(LibraryStatements):
         if spec.names:  # CPON ALWAYS: ALWAYS is one of the names
             args = ", ".join([*(repr(a.name.upper()) for a in s.args if isinstance(a, ast.Var)),
                               *(["'ALWAYS'"] if s.always else [])])
-        else:  # DURATION 0.5 ALWAYS
-            args = ", ".join(["None" if a is None else self.expr(a) for a in s.args]
-                             + (["always=True"] if s.always else []))
+        else:  # DURATION 0.5 ALWAYS, ACCEL (1) 50, 50
+            if s.profile is not None and "profile" not in inspect.signature(spec.function).parameters:
+                raise self.error(s, msg.SYNTAX_ERROR, f"{name} takes no parenthesised argument")
+            args = ", ".join(([self.checked_arguments(name, spec.function, s.args)] if s.args else [])
+                             + (["always=True"] if s.always else [])
+                             + ([f"profile={self.checked(s.profile, '_real', name)}"] if s.profile else []))
         call = f"I[{name!r}](rt{', ' if args else ''}{args})"
         self.emit(depth, f"yield from {call}" if spec.waits else call)
 
@@ -902,6 +963,11 @@ class ProgramCompiler(LibraryStatements):
         if len(s.args) <= position or s.args[position] is None:
             if s.name == "REACTE":  # REACTE alone: no error trap any more
                 self.emit(depth, "rt.react_error(None)")
+                return
+            if s.name == "REACTI" and s.args and s.args[0] is not None:
+                # REACTI signal alone: the robot stops when the signal changes; no routine is called.
+                priority = "None" if len(s.args) < 3 or s.args[2] is None else self.expr(s.args[2])
+                self.emit(depth, f"rt.react({self.expr(s.args[0])}, None, [], {priority}, immediate=True)")
                 return
             raise self.error(s, msg.INVALID_ARGUMENT, f"{s.name} needs a program")
         target = s.args[position]

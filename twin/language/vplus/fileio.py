@@ -244,6 +244,7 @@ class Devices:
         if self.open_files() >= MAX_OPEN_FILES:
             raise IoError(msg.DEVICE_NOT_READY)
         path = self.disk_path(spec, wildcards=mode == "D")
+        self._check_shared(task, path, writing=mode in ("W", "A"))
         box = self.box
         handle = OpenFile(path, mode, record_length, random=bool(flags & RANDOM_ACCESS), box=box)
         if mode == "D":
@@ -269,6 +270,15 @@ class Devices:
             handle.data = _sandboxed(box.read_bytes, path)
             handle.position = len(handle.data)
         unit.file = handle
+
+    def _check_shared(self, task: int, path: Path, writing: bool) -> None:
+        """"While a file is open for write or append access, another control program task
+        cannot access that file"; several tasks may read it ([000] L7689-7691, [001] L3118).
+        The guides give no code: *File already open*."""
+        for (other, _lun), unit in self.units.items():
+            held = unit.file
+            if other != task and held is not None and held.path == path and (writing or held.mode in ("W", "A")):
+                raise IoError(msg.FILE_ALREADY_OPEN)
 
     def open_network(self, task: int, lun: int, spec: str) -> None:
         """FOPEN on a TCP unit: a server (/LOCAL_PORT) or a client (/REMOTE_PORT)."""
@@ -313,6 +323,7 @@ class Devices:
         path = self.disk_path(spec)
         if not path.is_file():
             raise IoError(msg.NONEXISTENT_FILE)
+        self._check_shared(task, path, writing=True)
         path.unlink()
 
     def fseek(self, task: int, lun: int, record: int) -> None:

@@ -18,6 +18,7 @@ import math
 from dataclasses import dataclass
 
 from ...controller.location import Location
+from .values import components
 
 
 @dataclass(frozen=True)
@@ -79,7 +80,7 @@ def format_number(value: float, fmt: Fmt | None) -> str:
 
 def format_location(loc: Location) -> str:
     """A transformation as LISTL shows it: 2 decimals for X Y Z, 3 for angles."""
-    x, y, z, yaw, pitch, roll = loc.components()
+    x, y, z, yaw, pitch, roll = components(loc)
     return f"{x:.2f} {y:.2f} {z:.2f} {yaw:.3f} {pitch:.3f} {roll:.3f}"
 
 

@@ -8,6 +8,7 @@ column and offending text, and the V+ message.
 
 from __future__ import annotations
 
+import math
 from functools import lru_cache
 from importlib.resources import files
 from pathlib import Path
@@ -18,6 +19,7 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
 from ...errors import ProgramError
 from . import ast
 from . import messages as msg
+from .keywords import STRING_FUNCTIONS
 from .structure import nest
 
 NAME_LENGTH = 15  # significant characters of a V+ name, not counting the prefix
@@ -37,6 +39,10 @@ def normalize_name(text: str) -> str:
     return prefix + text[len(prefix) :][:NAME_LENGTH]
 
 
+# AUTO REAL x, LOCAL DOUBLE d, GLOBAL LOC spot: REAL a single-precision real, DOUBLE 64 bits,
+# LOC a location (a transformation, or a precision point for a # name).
+DECLARATION_TYPES = ("REAL", "DOUBLE", "LOC")
+UTF8_BOM = b"\xef\xbb\xbf"
 BINARY_DIGITS = 8  # "^B ... binary (maximum of 8 bits)", [000] L3903-3905
 
 
@@ -71,6 +77,9 @@ class _ToAst(Transformer_NonRecursive):  # long expressions make deep trees
         except ValueError:
             raise ProgramError(f"{msg.message(msg.SYNTAX_ERROR)} bad number {text}", msg.SYNTAX_ERROR,
                                line=meta.line, column=meta.column) from None
+        if not math.isfinite(value):  # 1E400: beyond even a DOUBLE ([000] L3868-3895)
+            raise ProgramError(f"{msg.message(msg.OVERFLOW)} {text} is beyond the range of a real",
+                               msg.OVERFLOW, line=meta.line, column=meta.column)
         return ast.Num(value, double=text[:2].upper() == "^D")
 
     def string(self, meta, children):
@@ -160,15 +169,15 @@ class _ToAst(Transformer_NonRecursive):  # long expressions make deep trees
         return ast.SetLocation(target, value, **_pos(meta))
 
     def declaration(self, meta, children):
-        scope = str(children[0]).upper()
-        double = False
-        items = []
-        for child in children[1:]:
-            if isinstance(child, Token):  # the DOUBLE keyword
-                double = True
-            elif child is not None:
-                items.append(child)
-        return ast.Declare(scope, double, items, **_pos(meta))
+        scope, kind, *items = children
+        if kind is not None:
+            kind_name = str(kind).upper()
+            if kind_name not in DECLARATION_TYPES:
+                raise ProgramError(f"{msg.message(msg.SYNTAX_ERROR)} unknown type {kind} (REAL, DOUBLE or LOC)",
+                                   msg.SYNTAX_ERROR, line=kind.line, column=kind.column)
+            kind = kind_name
+        return ast.Declare(str(scope).upper(), kind == "DOUBLE", [i for i in items if i is not None], kind=kind,
+                           **_pos(meta))
 
     def decl_item(self, meta, children):
         dims = [c for c in children[1:] if c is not None]
@@ -214,7 +223,12 @@ class _ToAst(Transformer_NonRecursive):  # long expressions make deep trees
         return ast.CallProgram(normalize_name(str(children[0])), children[1] or [], **_pos(meta))
 
     def calls_statement(self, meta, children):
-        return ast.CallProgram(None, children[1], name_expr=children[0], **_pos(meta))
+        """CALLS $program_name(length, width) ([000] "CALLS"): the string variable names
+        the program and the arguments follow it."""
+        name, args = children
+        if args is None and isinstance(name, ast.Call) and name.name not in STRING_FUNCTIONS:
+            name, args = ast.Var(normalize_name(name.name)), name.args
+        return ast.CallProgram(None, args or [], name_expr=name, **_pos(meta))
 
     def type_statement(self, meta, children):
         items = [c for c in children if c is not None]
@@ -251,6 +265,10 @@ class _ToAst(Transformer_NonRecursive):  # long expressions make deep trees
     def instruction(self, meta, children):
         name, args, always = children
         return ast.Instruction(str(name).upper(), args, always is not None, **_pos(meta))
+
+    def profiled_instruction(self, meta, children):
+        name, profile, args = children
+        return ast.Instruction(str(name).upper(), args, profile=profile, **_pos(meta))
 
     # ---- I/O and keyed statements (lang-library)
     def io_statement(self, meta, children):
@@ -315,7 +333,7 @@ def _syntax_error(err: UnexpectedInput, text: str, file: str) -> ProgramError:
 def parse(text: str, file: str = "<string>") -> ast.Module:
     """Parse a whole V+ file (programs and data sections) into a Module."""
     # The controller marks the end of a file with Ctrl-Z; lines may end in CR LF.
-    text = text.replace("\r\n", "\n").split("\x1a", 1)[0]
+    text = text.removeprefix("\ufeff").replace("\r\n", "\n").split("\x1a", 1)[0]
     if not text.endswith("\n"):
         text += "\n"
     try:
@@ -352,7 +370,8 @@ def parse(text: str, file: str = "<string>") -> ast.Module:
 def parse_file(path: str | Path) -> ast.Module:
     path = Path(path)
     try:
-        text = path.read_text(encoding="latin-1")
+        data = path.read_bytes()
     except OSError:
         raise ProgramError(f"*Nonexistent file* {path}", file=str(path)) from None
-    return parse(text, str(path))
+    # An editor on the host may have written a UTF-8 byte-order mark: it is not part of the program.
+    return parse(data.removeprefix(UTF8_BOM).decode("latin-1"), str(path))

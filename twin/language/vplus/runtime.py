@@ -31,10 +31,32 @@ from .keywords.strings import typed_number
 from .parser import normalize_name, parse, parse_file
 # Parameters and switches with the manuals' defaults and limits.
 from .settings import PARAMETER_DEFAULTS, SWITCH_DEFAULTS, in_range
-from .tasking import HaltProgram, StopProgram, TaskControl
+from .tasking import PROGRAM_FAULTS, HaltProgram, StopProgram, TaskControl
 
 MAJOR_CYCLE = 0.016  # s: the V+ scheduler's major cycle and trajectory period
-MAX_CALL_DEPTH = 200  # "*Too many subroutine calls*" past this many nested CALLs
+# Program stacks ([000] "Program Stacks", [001] L441-465): 6 KB per task in V+, 32 KB in
+# eV+; a call takes 20 bytes, each argument 32 plus its value (a real 4, a transformation
+# 48, a precision point 4 per joint, a string 132; an array, passed by reference, nothing
+# more), each AUTO variable its size (compiler.frame_bytes).  Past the stack:
+# *Too many subroutine calls*.
+STACK_BYTES = {"V+": 6 * 1024, "eV+": 32 * 1024}
+CALL_BYTES, ARGUMENT_BYTES = 20, 32
+# The deepest eV+ stack (32 KB of 20-byte calls) nests ~1640 calls, two Python generator
+# frames each: Python's own limit must allow it.
+sys.setrecursionlimit(max(sys.getrecursionlimit(), 8000))
+
+
+def _value_bytes(value) -> int:
+    """Stack bytes of an argument's value ([000] "Stack Space Required by a Subroutine")."""
+    if isinstance(value, float):
+        return 4
+    if isinstance(value, str):
+        return 132
+    if isinstance(value, Location):
+        return 48
+    if isinstance(value, tuple):
+        return 4 * len(value)
+    return 0  # an array (by reference) or an omitted argument
 
 
 def parse_real(text: str) -> float:
@@ -105,12 +127,30 @@ class VPlusSystem:
         self.sources: dict[str, list[str]] = {}  # file -> its lines, for error messages
         # Logical units; disk files live in `sandbox` (no disk when it is None).
         self.devices = Devices(sandbox, self.console, clock)
+        self.accel_profile = 0  # ACCEL (profile): the robot's acceleration profile number
         self.timers: dict[int, float] = {}  # TIMER n = value: the clock reading that timer n counts from
 
     # ------------------------------------------------------------ loading
     def load(self, path: str | Path) -> list[str]:
         """LOAD a file: parse, compile; returns the program names in file order."""
         return self._load_module(parse_file(path))
+
+    def load_files(self, paths: list[str | Path]) -> list[str]:
+        """LOAD several files, as a cell keeps its modules (programs in one, .LOCATIONS and
+        .REALS in another); returns the first file's program names.  A program two files
+        define is a load-time error at its second definition."""
+        first: list[str] | None = None
+        for path in paths:
+            module = parse_file(path)
+            for program in module.programs:
+                if program.name in self.programs:
+                    raise ProgramError(
+                        f"{msg.message(msg.SYNTAX_ERROR)} program {program.name} is already loaded from "
+                        f"{self.programs[program.name].file}", msg.SYNTAX_ERROR, file=program.file,
+                        line=program.line, column=1, text=module.lines[program.line - 1])
+            names = self._load_module(module)
+            first = names if first is None else first
+        return first or []
 
     def load_text(self, text: str, file: str = "<string>") -> list[str]:
         return self._load_module(parse(text, file))
@@ -209,7 +249,7 @@ class Task(TaskControl):
         self.globals = system.globals
         self.io = system.io
         self.random = system.random
-        self.depth = 0
+        self.stack_used = 0  # bytes of the program stack the active calls take
         self.last_error: int | None = None
         self.error: ProgramError | None = None
         self.finished = False
@@ -265,6 +305,10 @@ class Task(TaskControl):
             problem = ProgramError(f"{msg.message(msg.UNDEFINED_VALUE)} {name}", msg.UNDEFINED_VALUE)
         elif isinstance(err, ZeroDivisionError):
             problem = ProgramError(msg.message(msg.DIVIDE_BY_ZERO), msg.DIVIDE_BY_ZERO)
+        elif isinstance(err, OverflowError):
+            problem = ProgramError(msg.message(msg.OVERFLOW), msg.OVERFLOW)
+        elif isinstance(err, ValueError):  # math domain errors, values a keyword cannot take
+            problem = ProgramError(msg.message(msg.ILLEGAL_VALUE), msg.ILLEGAL_VALUE)
         else:
             problem = ProgramError(msg.message(msg.WRONG_TYPE), msg.WRONG_TYPE)
         return self._locate(problem, err.__traceback__)
@@ -273,13 +317,15 @@ class Task(TaskControl):
         compiled = self.system.programs.get(name)
         if compiled is None:
             raise ProgramError(f"{msg.message(msg.UNDEFINED_PROGRAM)} {name}", msg.UNDEFINED_PROGRAM)
-        if self.depth >= MAX_CALL_DEPTH:
-            raise ProgramError(msg.message(msg.TOO_MANY_CALLS), msg.TOO_MANY_CALLS)
-        self.depth += 1
+        frame = compiled.frame_bytes + sum(ARGUMENT_BYTES + _value_bytes(a) for a in args)
+        stack = STACK_BYTES[self.system.dialect]
+        if self.stack_used + frame > stack:
+            raise ProgramError(f"{msg.message(msg.TOO_MANY_CALLS)} (a {stack // 1024} KB stack)", msg.TOO_MANY_CALLS)
+        self.stack_used += frame
         try:
             return (yield from compiled.function(self, args))
         finally:
-            self.depth -= 1
+            self.stack_used -= frame
 
     def program_locals(self, name: str) -> dict:
         return self.system.locals.setdefault(name, {})
@@ -370,8 +416,8 @@ def _python_code(program) -> tuple[CompiledProgram, object]:
     compiled = compile_program(program)
     try:
         return compiled, _python_compile(compiled)
-    except SyntaxError as err:
-        if "too many statically nested blocks" not in str(err):
+    except SyntaxError as err:  # IndentationError included: "too many levels of indentation"
+        if "too many statically nested blocks" not in str(err) and "too many levels of indentation" not in str(err):
             raise
     compiled = compile_program(program, flat=True)
     return compiled, _python_compile(compiled)
@@ -419,6 +465,6 @@ _NAMESPACE = {
     "I": {name: spec.function for name, spec in INSTRUCTIONS.items()},
     "_fmt": _fmt,
     # What a step may raise that the error trap (REACTE) catches.
-    "_TRAPPED": (ProgramError, KeyError, NameError, ZeroDivisionError, TypeError, IndexError),
+    "_TRAPPED": (ProgramError, *PROGRAM_FAULTS),
     **{name: getattr(values, name) for name in dir(values) if name.startswith("_") and not name.startswith("__")},
 }

@@ -22,10 +22,17 @@ def _error(statement: ast.Statement, what: str) -> ProgramError:
     )
 
 
+# Blocks (IF, FOR, WHILE, DO, CASE) may nest this deep.  The guides set no number; the
+# controller's program stack bounds it.  Deeper is a load-time *Control structure error*
+# at the opening step (docs/vplus.md, "Deep nesting").
+MAX_NESTING = 200
+
+
 class _Nester:
     def __init__(self, statements: list[ast.Statement]):
         self.statements = statements
         self.pos = 0
+        self.depth = 0
 
     def block(self, stops: tuple[type, ...]) -> tuple[list[ast.Statement], ast.Statement | None]:
         """Statements up to (not including) one of the `stops` types."""
@@ -48,7 +55,13 @@ class _Nester:
         return body, None
 
     def require(self, opener: ast.Statement, stops: tuple[type, ...], name: str):
-        body, stop = self.block(stops)
+        if self.depth >= MAX_NESTING:
+            raise _error(opener, f"blocks nested deeper than {MAX_NESTING}")
+        self.depth += 1
+        try:
+            body, stop = self.block(stops)
+        finally:
+            self.depth -= 1
         if stop is None:
             raise _error(opener, f"missing {name}")
         return body, stop

@@ -27,7 +27,8 @@ TASKS = 28  # tasks 0..27 (0..6 without the V+ Extensions), [000] L1364
 ERROR_TRAP_PRIORITY = 254  # program priority inside a REACTE routine, [000] L1340
 MAX_PROGRAM_PRIORITY = 127  # LOCK and reaction priorities 0..127, [000] L1284
 MAX_TASK_PRIORITY = 64  # task priorities in a slice: 1-31 user, up to 64 the servo ([000] L1376-1392)
-REACT_SIGNALS = (range(1001, 1013), range(2001, 2009))  # inputs and soft signals, [000] L4507
+REACT_SIGNALS = (range(1001, 1013), range(2001, 2009))
+TASK_IDLE, TASK_PAUSED, TASK_STOPPED_BY_ERROR, TASK_EXECUTING = 0.0, 2.0, 3.0, 4.0  # TASK(1, n)  # inputs and soft signals, [000] L4507
 
 # Default task priority in each of the 16 time slices ([000] L1960-2075, the
 # "Default Task Priorities" table; tasks 7..27 share the last row).
@@ -45,6 +46,12 @@ _OTHER_TASKS = (0,) * 13 + (5, 0, 0)
 
 def slice_priorities(number: int) -> tuple[int, ...]:
     return _SLICE_PRIORITIES.get(number, _OTHER_TASKS)
+
+
+# Python errors a step of generated code may raise that are the program's fault (an
+# undefined variable, a division by zero, a value of the wrong kind): runtime._translate
+# turns them into the V+ error, located at the step; raised elsewhere they are twin's bugs.
+PROGRAM_FAULTS = (KeyError, NameError, ZeroDivisionError, TypeError, IndexError, ValueError, OverflowError)
 
 
 class StopProgram(Exception):
@@ -68,7 +75,7 @@ CHECK = _Check()
 @dataclass
 class Reaction:
     signal: int  # positive: react to off -> on; negative: on -> off
-    program: str
+    program: str | None  # None: REACTI signal alone stops the robot and calls nothing
     args: list
     priority: int
     immediate: bool  # REACTI: stop the robot at once
@@ -111,7 +118,7 @@ class TaskControl:
         except ProgramError as err:
             self.error = self._locate(err, err.__traceback__)
             self.last_error = err.code
-        except (KeyError, NameError, ZeroDivisionError, TypeError, IndexError) as err:
+        except PROGRAM_FAULTS as err:
             self.error = self._translate(err)
             self.last_error = self.error.code
         finally:
@@ -172,6 +179,9 @@ class TaskControl:
                 if reaction.immediate and self.system.robot is not None:
                     self.system.robot.stop()  # REACTI: BRAKE at once
             reaction.level = level
+        # REACTI signal without a program: stopping the robot was all it does, once.
+        for number in [n for n, r in self.reactions.items() if r.triggered and r.program is None]:
+            del self.reactions[number]
 
     def _due_reaction(self) -> Reaction | None:
         """The highest-priority triggered reaction above the program priority."""
@@ -198,7 +208,7 @@ class TaskControl:
         finally:
             self.program_priority = priority
 
-    def react(self, signal, program: str, args: list, priority=None, immediate: bool = False) -> None:
+    def react(self, signal, program: str | None, args: list, priority=None, immediate: bool = False) -> None:
         """REACT / REACTI signal, program(args), priority."""
         number = values.to_int(signal)
         level = 1 if priority is None else values.to_int(priority)
@@ -243,6 +253,8 @@ class TaskControl:
         finally:
             self.trapping = False
             self.program_priority = saved
+        if self._due_reaction() is not None:
+            yield CHECK  # a reaction held off by the trap's priority runs now, before the next step
 
     # ------------------------------------------------------------ other tasks
     def execute(self, number, program: str, args: list, cycles=None, step=None, priority=None) -> None:
@@ -391,10 +403,10 @@ class TaskControl:
 
     # ------------------------------------------------------------ TASK()
     def task_info(self, select=None, number=None) -> float:
-        """TASK(select, task) (twin's selectors, the LRG's are not in the guides):
-        0 or omitted: this task's number; 1: the state of `task` (0 idle or
-        never run, 1 running or waiting, 2 paused, 3 stopped by an error);
-        2: its program priority; 3: its execution cycles left."""
+        """TASK(select, task): 0 or omitted: this task's number; 1: the state of `task`
+        (0 idle or never run, 2 paused by PAUSE, 3 stopped by an error, 4 executing:
+        running or waiting, the value field drivers test with TASK(1, n) == 4); 2: its
+        program priority; 3: its execution cycles left (docs/vplus.md, "TASK(select, task)")."""
         which = 0 if select is None else values.to_int(select)
         if which == 0:
             return float(self.number)
@@ -403,8 +415,8 @@ class TaskControl:
             if task is None:
                 return 0.0
             if task.finished:
-                return 3.0 if task.error is not None else 0.0
-            return 2.0 if task.paused else 1.0
+                return TASK_STOPPED_BY_ERROR if task.error is not None else TASK_IDLE
+            return TASK_PAUSED if task.paused else TASK_EXECUTING
         if task is None:
             raise values.fail(msg.ILLEGAL_VALUE, "no such task")
         if which == 2:

@@ -89,9 +89,21 @@ def _str(value) -> str:
 
 
 def _real(value) -> float:
-    if isinstance(value, (str, Location)) or value is None:
-        raise fail(msg.WRONG_TYPE, "real value expected")
-    return float(value)
+    """A real argument or value: a string, location, precision point or array is
+    *Wrong data type*."""
+    if isinstance(value, float):
+        return value
+    if isinstance(value, int):
+        return float(value)
+    raise fail(msg.WRONG_TYPE, "real value expected")
+
+
+def _double(value) -> float:
+    """Store into a DOUBLE variable: a real within the double range."""
+    value = _real(value)
+    if not math.isfinite(value):
+        raise fail(msg.OVERFLOW, "beyond the range of a DOUBLE")
+    return value
 
 
 def single(value: float) -> float:
@@ -103,7 +115,10 @@ def single(value: float) -> float:
 def _single(value) -> float:
     """Store into a real variable: a real, rounded to single precision."""
     try:
-        return _SINGLE.unpack(_SINGLE.pack(value))[0]
+        stored = _SINGLE.unpack(_SINGLE.pack(value))[0]
+        if stored - stored != 0.0:  # an infinity or NaN from 64-bit arithmetic inside the expression
+            raise OverflowError
+        return stored
     except OverflowError:
         raise fail(msg.OVERFLOW, f"{value:g} is beyond single precision") from None
     except struct.error:
@@ -128,11 +143,36 @@ def _location(value) -> Location:
     return value
 
 
+def _point(value):
+    """Where a motion may go: a transformation or a precision point."""
+    if not isinstance(value, (Location, tuple)):
+        raise fail(msg.WRONG_TYPE, "location expected")
+    return value
+
+
 def _precision_point(value) -> tuple:
     """SET #p = ...: a precision point is a tuple of joint values."""
     if not isinstance(value, tuple):
         raise fail(msg.WRONG_TYPE, "precision point expected")
     return value
+
+
+def _turn(angle: float) -> float:
+    """An angle in (-180, 180]."""
+    angle = math.fmod(angle, 360.0)
+    return angle - 360.0 if angle > 180.0 else angle + 360.0 if angle <= -180.0 else angle + 0.0
+
+
+def components(loc: Location) -> tuple[float, ...]:
+    """x, y, z, yaw, pitch, roll as V+ shows them: every angle within +-180 and pitch signed,
+    "a positive rotation of 190 degrees is shown as -170" ([000] L6018-6019, [001] L2216).
+    Of the two equal triples (y, p, r) and (y + 180, -p, r + 180) the one with yaw in
+    (-90, 90] is shown; pitch 0 or 180 keeps yaw 0 (the SCARA form: the tool straight down
+    has pitch 180 and its turn in roll)."""
+    x, y, z, yaw, pitch, roll = loc.components()
+    if pitch not in (0.0, 180.0) and not -90.0 < yaw <= 90.0:
+        yaw, pitch, roll = _turn(yaw + 180.0), -pitch, _turn(roll + 180.0)
+    return x, y, z, yaw, pitch, roll
 
 
 def _compound(a, b) -> Location:

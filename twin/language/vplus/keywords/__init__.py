@@ -42,6 +42,47 @@ class InstructionSpec:
     writes_back: bool = False
 
 
+# Argument kinds.  A keyword's parameter is a real unless its annotation says otherwise;
+# the compiler checks every argument against its parameter's kind, as the controller's
+# keyword table does: a string or a location where a number belongs is *Wrong data type*
+# (at load time when the argument is a string constant or a $ expression), never a Python
+# error from inside the library.
+class Loc:
+    """A transformation."""
+
+
+class Point:
+    """A transformation or a precision point (#p): where a motion may go."""
+
+
+class Str:
+    """A string."""
+
+
+class Any:
+    """Anything: the keyword checks it itself (an array, a value of either kind)."""
+
+
+# kind name (as written in an annotation) -> the check the generated code applies
+# (runtime.values), None: none
+_CHECKS = {"Loc": "_location", "Point": "_point", "Str": "_str", "Any": None, "float": "_real"}
+
+
+def argument_check(fn: Callable, position: int) -> str | None:
+    """The check for argument `position` (0 is the first after rt): "_real" unless the
+    parameter is annotated with another kind."""
+    params = [p for p in list(inspect.signature(fn).parameters.values())[1:] if p.kind is not p.KEYWORD_ONLY]
+    if not params:
+        return None
+    param = params[min(position, len(params) - 1)]
+    if position >= len(params) and param.kind is not param.VAR_POSITIONAL:
+        return None  # too many arguments: argument_count reports it
+    annotation = param.annotation
+    if annotation is param.empty:
+        return "_real"
+    return _CHECKS.get(annotation if isinstance(annotation, str) else annotation.__name__)
+
+
 INSTRUCTIONS: dict[str, InstructionSpec] = {}
 FUNCTIONS: dict[str, Callable] = {}
 STRING_FUNCTIONS: dict[str, Callable] = {}

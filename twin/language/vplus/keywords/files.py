@@ -13,7 +13,7 @@ from ....controller.scheduler import NETWORK_CYCLE
 from ..fileio import RETURN_LUN, TERMINAL_LUN, IoError
 from ..formats import render
 from ..values import MAX_STRING, _str, fail, to_int
-from . import function, instruction
+from . import Any, function, instruction
 from .strings import leading_number
 
 ROBOT_LUN = 0
@@ -235,7 +235,7 @@ def _getevent(rt, unit: tuple, kinds: tuple):
     return [None] * len(kinds)
 
 
-def _no_pendant(rt, *args):
+def _no_pendant(rt, *args: Any):
     # The T20 pendant screens of eV+ ([001] "Programming the T20 Pendant"):
     # with no pendant connected there is nothing to draw on.
     raise fail(msg.DEVICE_NOT_READY, "no pendant is connected")
@@ -245,7 +245,7 @@ for _name in ("PDNT.WRITE", "PDNT.NOTIFY", "PDNT.CLEAR"):
     instruction(_name)(_no_pendant)
 
 
-def _no_camera(rt, *args):
+def _no_camera(rt, *args: Any):
     # The vision option ([000] "label.blob()"): the twin's cell has no camera.
     raise fail(msg.DEVICE_NOT_READY, "no vision system is installed")
 

@@ -8,8 +8,8 @@ import numpy as np
 
 from ....controller.location import NULL, Location, trans
 from .. import messages as msg
-from ..values import FALSE, TRUE, fail
-from . import function, instruction
+from ..values import FALSE, TRUE, components, fail
+from . import Any, Loc, function, instruction
 
 DEG = math.pi / 180.0
 
@@ -31,12 +31,12 @@ def _null(rt):
 
 
 @function("INVERSE")
-def _inverse(rt, loc):
+def _inverse(rt, loc: Loc):
     return location_arg(loc).inverse()
 
 
 @function("SHIFT")
-def _shift(rt, loc, dx=0.0, dy=0.0, dz=0.0):
+def _shift(rt, loc: Loc, dx=0.0, dy=0.0, dz=0.0):
     return location_arg(loc).shifted(dx or 0.0, dy or 0.0, dz or 0.0)
 
 
@@ -63,22 +63,22 @@ def _pdest(rt):
 
 
 @function("DX")
-def _dx(rt, loc):
+def _dx(rt, loc: Loc):
     return location_arg(loc).x
 
 
 @function("DY")
-def _dy(rt, loc):
+def _dy(rt, loc: Loc):
     return location_arg(loc).y
 
 
 @function("DZ")
-def _dz(rt, loc):
+def _dz(rt, loc: Loc):
     return location_arg(loc).z
 
 
 @function("DISTANCE")
-def _distance(rt, a, b):
+def _distance(rt, a: Loc, b: Loc):
     a, b = location_arg(a), location_arg(b)
     return math.dist((a.x, a.y, a.z), (b.x, b.y, b.z))
 
@@ -108,7 +108,7 @@ def _rotation(axis: int, angle: float):
 
 
 @function("FRAME")
-def _frame(rt, x1, x2, y, origin):
+def _frame(rt, x1: Loc, x2: Loc, y: Loc, origin: Loc):
     """FRAME(p1, p2, p3, p4): X from p1 towards p2, Y in the plane of p3 on its
     +Y side, origin at p4 (V+ guide v17, "Defining a Reference Frame")."""
     p1, p2, p3, p4 = (location_arg(p).position() for p in (x1, x2, y, origin))
@@ -126,21 +126,21 @@ def _frame(rt, x1, x2, y, origin):
 
 
 @function("SCALE")
-def _scale(rt, loc, factor):
+def _scale(rt, loc: Loc, factor):
     """SCALE(t BY k): the position multiplied by k, the orientation kept."""
     loc = location_arg(loc)
     return Location(loc.x * factor, loc.y * factor, loc.z * factor, loc.yaw, loc.pitch, loc.roll)
 
 
 @function("NORMAL")
-def _normal(rt, loc):
+def _normal(rt, loc: Loc):
     # A Location is rebuilt from its angles every time, so its rotation is
     # always orthonormal: there is no round-off to remove.
     return location_arg(loc)
 
 
 @function("IDENTICAL")
-def _identical(rt, a, b):
+def _identical(rt, a: Loc, b: Loc):
     """True when the two transformations are the same (to 1e-6 of a mm or a degree
     in their matrices, the canonical angles being rebuilt from them)."""
     same = np.allclose(location_arg(a).matrix(), location_arg(b).matrix(), atol=1e-6)
@@ -154,11 +154,11 @@ def _ppoint(rt, *joints):
 
 
 @instruction("DECOMPOSE", targets=True)
-def _decompose(rt, value, target):
+def _decompose(rt, value: Any, target: Any):
     """DECOMPOSE a[i] = loc: x, y, z, yaw, pitch, roll (or a precision point's
     joints) into a[i], a[i+1], ..."""
     if isinstance(value, Location):
-        parts = value.components()
+        parts = components(value)
     elif isinstance(value, tuple):
         parts = value
     else:

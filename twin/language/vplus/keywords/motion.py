@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from ....controller.location import Location, approach
 from .. import messages as msg
-from ..values import fail
-from . import function, instruction
+from ..values import fail, to_int
+from . import Loc, Point, function, instruction
 from .locations import location_arg
 
 
@@ -34,6 +34,15 @@ def _as_location(rt, value) -> Location:
     return location_arg(value)
 
 
+def _dry_run(rt) -> bool:
+    """DRY.RUN: "robot motion instructions are ignored", the robot stays attached to the
+    task ([000] L750-751, L778-779, L5853)."""
+    if not rt.switch("DRY.RUN"):
+        return False
+    rt.robot_for_motion()
+    return True
+
+
 def _always(names: tuple) -> bool:
     extra = [n for n in names if n != "ALWAYS"]
     if extra:
@@ -42,45 +51,61 @@ def _always(names: tuple) -> bool:
 
 
 @instruction("MOVE", waits=True)
-def _move(rt, loc):
+def _move(rt, loc: Point):
+    if _dry_run(rt):
+        return
     yield from rt.robot.move(_destination(loc), straight=False, cp=_cp(rt))
 
 
 @instruction("MOVES", waits=True)
-def _moves(rt, loc):
+def _moves(rt, loc: Point):
+    if _dry_run(rt):
+        return
     yield from rt.robot.move(_as_location(rt, loc), straight=True, cp=_cp(rt))
 
 
 @instruction("APPRO", waits=True)
-def _appro(rt, loc, distance=None):
+def _appro(rt, loc: Point, distance=None):
+    if _dry_run(rt):
+        return
     yield from rt.robot.move(approach(_as_location(rt, loc), distance or 0.0), straight=False, cp=_cp(rt))
 
 
 @instruction("APPROS", waits=True)
-def _appros(rt, loc, distance=None):
+def _appros(rt, loc: Point, distance=None):
+    if _dry_run(rt):
+        return
     yield from rt.robot.move(approach(_as_location(rt, loc), distance or 0.0), straight=True, cp=_cp(rt))
 
 
 @instruction("DEPART", waits=True)
 def _depart(rt, distance):
+    if _dry_run(rt):
+        return
     yield from rt.robot.move(approach(rt.robot.destination(), distance), straight=False, cp=_cp(rt))
 
 
 @instruction("DEPARTS", waits=True)
 def _departs(rt, distance):
+    if _dry_run(rt):
+        return
     yield from rt.robot.move(approach(rt.robot.destination(), distance), straight=True, cp=_cp(rt))
 
 
 @instruction("MOVET", waits=True)
-def _movet(rt, loc, hand):
+def _movet(rt, loc: Point, hand):
     """MOVET loc, hand: MOVE with the hand operated as the motion starts; a pneumatic hand
     opens for an opening above 0 and closes otherwise (docs/motion.md)."""
+    if _dry_run(rt):
+        return
     rt.robot.hand_at_next_motion(_hand_for_opening(hand))
     yield from _move(rt, loc)
 
 
 @instruction("MOVEST", waits=True)
-def _movest(rt, loc, hand):
+def _movest(rt, loc: Point, hand):
+    if _dry_run(rt):
+        return
     rt.robot.hand_at_next_motion(_hand_for_opening(hand))
     yield from _moves(rt, loc)
 
@@ -92,11 +117,13 @@ def _hand_for_opening(opening) -> str:
 @instruction("READY", waits=True)
 def _ready(rt):
     """READY: a joint motion to the robot's READY location, in its standard configuration."""
+    if _dry_run(rt):
+        return
     yield from rt.robot.move(rt.robot.ready_joints(), straight=False, cp=_cp(rt))
 
 
 @function("INRANGE")
-def _inrange(rt, loc):
+def _inrange(rt, loc: Point):
     """INRANGE(loc): 0 if the robot can reach loc, otherwise bits saying why not."""
     return float(rt.robot.inrange(_destination(loc)))
 
@@ -108,11 +135,15 @@ def _config(rt, select=0):
 
 @instruction("DRIVE", waits=True)
 def _drive(rt, joint, change, speed=None):
+    if _dry_run(rt):
+        return
     yield from rt.robot.drive(int(joint), float(change), 100.0 if speed is None else float(speed), cp=_cp(rt))
 
 
 @instruction("ALIGN", waits=True)
 def _align(rt):
+    if _dry_run(rt):
+        return
     yield from rt.robot.move(rt.robot.aligned(), straight=True, cp=_cp(rt))
 
 
@@ -123,20 +154,39 @@ def _break(rt):
 
 @instruction("DELAY", waits=True)
 def _delay(rt, seconds):
-    yield from rt.robot.dwell(float(seconds))
+    if _dry_run(rt):  # no motion to stop: the program still waits its time
+        yield from rt.sleep(max(seconds, 0.0))
+        return
+    yield from rt.robot.dwell(seconds)
 
 
 # ---------------------------------------------------------------- motion modifiers
+ACCEL_PROFILES = range(0, 9)  # profile numbers the LRG allows; only profile 0 is defined here
+
+
 @instruction("ACCEL")
-def _accel(rt, accel=None, decel=None):
+def _accel(rt, accel=None, decel=None, *, profile=None):
+    """ACCEL (profile) accel, decel: the V+ Language Reference's optional acceleration
+    profile (0 to 8) comes first.  The twin's robots define only profile 0 (the square-wave
+    acceleration), and "if a profile is specified that has not been defined, profile 0 is
+    used": the number is kept for ACCEL(0), the motion is profile 0's (docs/motion.md)."""
+    if profile is not None:
+        number = to_int(profile)
+        if number not in ACCEL_PROFILES:
+            raise fail(msg.ILLEGAL_VALUE, f"ACCEL profile {number} (0 to 8)")
+        rt.robot_for_motion()
+        rt.system.accel_profile = number
     rt.robot.set_accel(accel, decel)
 
 
 @function("ACCEL")
 def _accel_value(rt, select=1):
-    """ACCEL(1): acceleration %, ACCEL(2): deceleration %."""
+    """ACCEL(0): the acceleration profile, ACCEL(1): acceleration %, ACCEL(2): deceleration %."""
+    which = to_int(select)
+    if which == 0:
+        return float(rt.system.accel_profile)
     settings = rt.robot.settings
-    return settings.decel if int(select) == 2 else settings.accel
+    return settings.decel if which == 2 else settings.accel
 
 
 @instruction("DURATION")
@@ -204,7 +254,7 @@ for _name in ("ABOVE", "BELOW", "FLIP", "NOFLIP"):
 
 # ---------------------------------------------------------------- TOOL and BASE
 @instruction("TOOL", waits=True)
-def _tool(rt, loc):
+def _tool(rt, loc: Loc):
     yield from rt.robot.set_tool(location_arg(loc))
 
 

@@ -12,12 +12,14 @@ from __future__ import annotations
 from ....controller.kinematics import KinematicsError
 from .. import messages as msg
 from ..values import fail
-from . import function, instruction
+from . import Any, Loc, function, instruction
 from .locations import location_arg
 
 HAND_VALUES = {"open": 1.0, "close": 0.0, "relax": -1.0}
 STATE_PROGRAM_CONTROL = 7  # STATE(1): the robot is under program control
 STATE_NO_MOTION, STATE_MOVING, STATE_STOPPED = 0, 1, 2  # STATE(2)
+STATE_COMPUTER_CONTROL = 5  # STATE(3): the last of the manual control modes, computer control
+STATE_NO_CONDITION = range(4, 10)  # STATE(4..9): bit flags and modes of hardware the cell lacks
 
 
 def _joints_from(rt, ref) -> list[float]:
@@ -34,7 +36,7 @@ def _joints_from(rt, ref) -> list[float]:
 
 
 @instruction("SOLVE.ANGLES", targets=True, array_values=(1,), writes_back=True)
-def _solve_angles(rt, trans, seed, in_flags, out_joints, out_flags, error):
+def _solve_angles(rt, trans: Loc, seed: Any, in_flags, out_joints: Any, out_flags: Any, error: Any):
     """o.jts[] gets the joints that put the tool tip at `trans` nearest i.jts[], in the
     configuration i.flags asks for (CONFIG bits), o.flags their bits and error 0; a
     location the robot cannot reach leaves o.jts[] and o.flags as they were and sets
@@ -54,14 +56,14 @@ def _solve_angles(rt, trans, seed, in_flags, out_joints, out_flags, error):
 
 
 @instruction("SOLVE.TRANS", targets=True, array_values=(0,), writes_back=True)
-def _solve_trans(rt, joints, trans, error=None):
+def _solve_trans(rt, joints: Any, trans: Any, error: Any = None):
     """trans gets the tool-tip location (TOOL and BASE applied) of the joints in i.jts[];
     error, if given, 0 (forward kinematics always has an answer)."""
     return rt.robot.location_of_joints(_joints_from(rt, joints)), 0.0
 
 
 @function("SOLVE.FLAGS")
-def _solve_flags(rt, joints):
+def _solve_flags(rt, joints: Any):
     """SOLVE.FLAGS(jts[]): the CONFIG bits (1 RIGHTY) of the joints in the array."""
     return float(rt.robot.configuration_of(_joints_from(rt, joints)))
 
@@ -77,7 +79,10 @@ def _hand(rt, select=1):
 @function("STATE")
 def _state(rt, select):
     """STATE(1): 7, the robot is under program control; STATE(2): 0 before the first
-    motion, 1 while a motion runs, 2 stopped at its planned location."""
+    motion, 1 while a motion runs, 2 stopped at its planned location; STATE(3): 5, computer
+    control (no manual control mode: there is no pendant); STATE(4) to STATE(9): 0, none of
+    the front-panel, hardware or mode conditions they report exists in the twin's cell
+    (docs/vplus.md, "STATE(select)")."""
     select = int(select)
     if select == 1:
         return float(STATE_PROGRAM_CONTROL)
@@ -86,6 +91,10 @@ def _state(rt, select):
         if robot.moving:
             return float(STATE_MOVING)
         return float(STATE_STOPPED if robot.history else STATE_NO_MOTION)
+    if select == 3:
+        return float(STATE_COMPUTER_CONTROL)
+    if select in STATE_NO_CONDITION:
+        return 0.0
     raise fail(msg.ILLEGAL_VALUE, f"STATE({select})")
 
 

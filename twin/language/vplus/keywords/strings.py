@@ -15,7 +15,7 @@ from ....controller.location import Location
 from .. import messages as msg
 from ..formats import render
 from ..values import MAX_STRING, _str, fail, to_int
-from . import function, instruction
+from . import Any, Loc, Str, function, instruction
 
 _NUMBER = re.compile(r"[ \t]*[+-]?(\d+\.?\d*|\.\d+)([Ee][+-]?\d+)?")
 
@@ -44,17 +44,17 @@ def _position(start) -> int:
 
 
 @function("VAL")
-def _val(rt, text):
+def _val(rt, text: Str):
     return leading_number(_str(text))
 
 
 @function("LEN")
-def _len(rt, text):
+def _len(rt, text: Str):
     return float(len(_str(text)))
 
 
 @function("ASC")
-def _asc(rt, text, index=None):
+def _asc(rt, text: Str, index=None):
     i = _position(index)
     return float(ord(text[i])) if i < len(text) else -1.0
 
@@ -68,20 +68,20 @@ def _chr(rt, code):
 
 
 @function("$MID")
-def _mid(rt, text, start, count=None):
+def _mid(rt, text: Str, start, count=None):
     begin = _position(start)
     return text[begin:] if count is None else text[begin : begin + max(to_int(count), 0)]
 
 
 @function("POS")
-def _pos(rt, text, sub, start=None):
+def _pos(rt, text: Str, sub: Str, start=None):
     """Position of `sub` in `text` from `start` (1-based), 0 if absent."""
     found = _str(text).find(_str(sub), _position(start))
     return float(found + 1)
 
 
 @function("$ENCODE")
-def _encode(rt, *items):
+def _encode(rt, *items: Any):
     text = render(items)[0]
     if len(text) > MAX_STRING:
         raise fail(msg.STRING_TOO_LONG)
@@ -89,7 +89,7 @@ def _encode(rt, *items):
 
 
 @function("$DECODE", writes_first=True)
-def _decode(rt, text, breaks, mode=0):
+def _decode(rt, text: Any, breaks: Str, mode=0):
     """$DECODE($var, $breaks, mode): mode 0 returns the characters of $var up to
     the first break character, mode 1 the break characters that lead it; the
     returned characters are removed from $var."""
@@ -102,7 +102,7 @@ def _decode(rt, text, breaks, mode=0):
 
 
 @function("$TRUNCATE")
-def _truncate(rt, text):
+def _truncate(rt, text: Str):
     return _str(text).split("\0", 1)[0]
 
 
@@ -118,7 +118,7 @@ def _span(first, count) -> tuple[int, int]:
 
 
 @function("$UNPACK")
-def _unpack(rt, target, first, count):
+def _unpack(rt, target: Any, first, count):
     """$UNPACK($a[i], first, count): `count` characters from position `first`."""
     array, index = target
     begin, size = _span(first, count)
@@ -131,7 +131,7 @@ def _unpack(rt, target, first, count):
 
 
 @instruction("PACK", targets=True)
-def _pack(rt, value, target, first, count):
+def _pack(rt, value: Str, target: Any, first, count):
     """PACK $a[i], first, count = $s: write `count` characters of $s (blank-
     padded) at position `first`, into the following elements if need be."""
     array, index = target
@@ -162,7 +162,7 @@ def _intb_s(rt, value):
 
 
 @function("INTB")
-def _intb(rt, text, start=None):
+def _intb(rt, text: Str, start=None):
     return float(struct.unpack(">h", _bytes(text, start, 2))[0])
 
 
@@ -172,7 +172,7 @@ def _lngb_s(rt, value):
 
 
 @function("LNGB")
-def _lngb(rt, text, start=None):
+def _lngb(rt, text: Str, start=None):
     return float(struct.unpack(">i", _bytes(text, start, 4))[0])
 
 
@@ -182,7 +182,7 @@ def _fltb_s(rt, value):
 
 
 @function("FLTB")
-def _fltb(rt, text, start=None):
+def _fltb(rt, text: Str, start=None):
     return float(struct.unpack(">f", _bytes(text, start, 4))[0])
 
 
@@ -192,12 +192,12 @@ def _dblb_s(rt, value):
 
 
 @function("DBLB")
-def _dblb(rt, text, start=None):
+def _dblb(rt, text: Str, start=None):
     return struct.unpack(">d", _bytes(text, start, 8))[0]
 
 
 @function("$TRANSB")
-def _transb_s(rt, loc):
+def _transb_s(rt, loc: Loc):
     """48 bytes: the transformation's 12 matrix entries (3x3 rotation by
     columns, then the position) as singles, the layout the LRG gives."""
     if not isinstance(loc, Location):
@@ -208,7 +208,7 @@ def _transb_s(rt, loc):
 
 
 @function("TRANSB")
-def _transb(rt, text, start=None):
+def _transb(rt, text: Str, start=None):
     values = struct.unpack(">12f", _bytes(text, start, 48))
     matrix = [[values[c * 3 + r] for c in range(3)] + [values[9 + r]] for r in range(3)] + [[0, 0, 0, 1]]
     return Location.from_matrix(matrix)

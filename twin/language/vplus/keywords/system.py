@@ -13,7 +13,7 @@ from datetime import datetime, timedelta
 from ....controller import io as dio
 from .. import messages as msg
 from ..values import FALSE, TRUE, VArray, fail, to_int, truth
-from . import function, instruction
+from . import Any, function, instruction
 
 TICKS_PER_SECOND = 1000.0  # TPS: the scheduler's 1 ms time slice
 SYSTEM_ID = "twin V+ emulation"  # $ID: the guides give no layout
@@ -94,7 +94,7 @@ def _tps(rt):
 
 
 @function("$TIME")
-def _time_text(rt, *args):
+def _time_text(rt, *args: Any):
     """$TIME(): the simulated date and time, "dd-MMM-yy hh:mm:ss".  The calendar
     starts at 01-JAN-00 00:00:00 when the run starts, so runs are repeatable."""
     if args:
@@ -154,21 +154,21 @@ def _reset(rt):
 
 # ---- memory, interlocks, identity
 @function("LAST")
-def _last(rt, array):
+def _last(rt, array: Any):
     if not isinstance(array, VArray):
         raise fail(msg.WRONG_TYPE, "LAST needs an array, a[]")
     return array.last()
 
 
 @function("TAS", writes_first=True)
-def _tas(rt, value, new):
+def _tas(rt, value: Any, new):
     """TAS(var, new): the old value, and var set to `new` in the same step (tasks
     switch only between steps here, so it is atomic)."""
     return value, float(new)
 
 
 @function("CAS", writes_first=True)
-def _cas(rt, value, test, new):
+def _cas(rt, value: Any, test, new):
     """CAS(var, test, new): the old value; var becomes `new` only if it equalled `test`."""
     return value, (float(new) if value == test else value)
 
@@ -191,20 +191,20 @@ def _aio_out(rt, value, channel):
 
 
 @function("$ID")
-def _id_text(rt, *args):
+def _id_text(rt, *args: Any):
     return SYSTEM_ID
 
 
 @function("ID")
-def _id(rt, *args):
+def _id(rt, *args: Any):
     return 0.0  # no hardware option boards to identify
 
 
 @function("FREE")
-def _free(rt, *args):
+def _free(rt, *args: Any):
     return 100.0  # percent of program memory free: memory never runs out here
 
 
 @function("$DEFAULT")
-def _default(rt, *args):
+def _default(rt, *args: Any):
     return "DISK>"  # the sandbox root is the default disk and path
