@@ -971,7 +971,7 @@ def test_modbus_write_and_read_examples(rt, modbus_slave):
 def test_hardware_members_say_why_they_are_missing(rt):
     """What needs hardware the twin lacks raises -3103 with the reason (docs/gpl.md)."""
     for call, reason in ((lambda: Move.Arc(rt, None, None, None), "circular"),
-                         (lambda: CLASSES["latch"].Count(rt, 1), "latch inputs"),
+                         (lambda: CLASSES["latch"].ThreadEvent(rt, 2), "latch thread events"),
                          (lambda: Robot.MotorTempStatus(rt, 1), "temperatures")):
         with pytest.raises(GplError) as err:
             call()

@@ -14,6 +14,7 @@ import pytest
 
 from twin.physics.cell import Cell
 from twin.physics.geometry import vplus_to_matrix
+from twin.physics.parts import RETIRED
 from twin.physics.scene import load_scene
 
 REPO = Path(__file__).resolve().parent.parent
@@ -105,7 +106,7 @@ def test_cell_loads_with_the_scene_contents(cell: Cell):
     assert m.opt.integrator == mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     assert m.opt.enableflags & int(mujoco.mjtEnableBit.mjENBL_SLEEP)
     scene = cell.scene
-    assert scene["feeder"]["pool"] >= 110
+    assert scene["feeder"][0]["pool"] >= 110
     for name in ("start", "pick", "place"):
         assert len(cell.locations()[name]) == 6
     # Gripper: both fingers, actuators with a force limit, tcp site, pads.
@@ -116,7 +117,7 @@ def test_cell_loads_with_the_scene_contents(cell: Cell):
         assert 40 <= hi <= 100 and lo == -hi
     m.site("gripper/tcp"), m.geom("gripper/pad_left"), m.geom("gripper/pad_right")
     # Belt runs at the scene's speed; welds are declared and inactive.
-    assert np.linalg.norm(m.geom_surfacevel[m.geom("belt").id, :3]) * 1000 == pytest.approx(scene["conveyor"]["speed"])
+    assert np.linalg.norm(m.geom_surfacevel[m.geom("conveyor_belt").id, :3]) * 1000 == pytest.approx(scene["conveyor"][0]["speed"])
     assert not cell.data.eq_active.any()
     # The robot holds still at home before anything runs.
     q0 = cell.robot_qpos()
@@ -162,8 +163,8 @@ def test_taught_locations_put_the_tcp_on_the_part(cell: Cell):
     assert tcp[2] == pytest.approx(part["pose"][2], abs=1.0)
     d.qpos[[cell.model.joint(n).qposadr[0] for n in cell.robot_joint_names]] = drv.ik("place")
     mujoco.mj_kinematics(cell.model, d)
-    belt_top = cell.scene["conveyor"]["top_center"][2]
-    gap = d.site("gripper/tcp").xpos[2] * 1000 - cell.scene["part"]["size"][2] / 2 - belt_top
+    belt_top = cell.scene["conveyor"][0]["top_center"][2]
+    gap = d.site("gripper/tcp").xpos[2] * 1000 - cell.scene["part"][0]["size"][2] / 2 - belt_top
     assert 1.0 <= gap <= 6.0
 
 
@@ -309,7 +310,7 @@ def test_parts_at_rest_in_the_bin_are_retired_and_stay_put(cell: Cell):
     in_bin = [p for p in cell.parts_report() if p["region"] == "bin"]
     assert len(in_bin) == 3 and not any(p["dropped"] for p in in_bin)
     ids = [p["id"] for p in in_bin]
-    assert cell._retired[ids].all()
+    assert (cell.parts.state[ids] == RETIRED).all()
     before = {i: cell.part_position(i) for i in ids}
     drv.wait(1.0)
     for i in ids:

@@ -141,6 +141,11 @@ WRITTEN_CASES = [
     (["FOR i = loc TO 3", "END"], msg.WRONG_TYPE, 1),
     (["FOR i = 1 TO loc", "END"], msg.WRONG_TYPE, 1),
     (["CASE loc OF", "VALUE 1:", "END"], msg.WRONG_TYPE, 1),
+    (["IF loc THEN", "END"], msg.WRONG_TYPE, 1),
+    (["WHILE loc DO", "END"], msg.WRONG_TYPE, 1),
+    (["DO", "UNTIL loc"], msg.WRONG_TYPE, 2),
+    (["x = NOT loc"], msg.WRONG_TYPE, 1),
+    (["IF loc GOTO 10", "10 x = 1"], msg.WRONG_TYPE, 1),
     (["x[loc] = 1"], msg.WRONG_TYPE, 1),
     (['x[$s] = 1'], msg.WRONG_TYPE, 1),
     (["x[-1] = 1"], msg.ILLEGAL_ARRAY_INDEX, 1),
@@ -218,6 +223,26 @@ def test_blocks_nested_beyond_the_limit_are_a_control_structure_error(depth):
     body = [*["IF n == 1 THEN"] * depth, "y = 1", *["END"] * depth]
     err = outcome([*PROLOGUE, *body])
     assert_located(err, msg.CONTROL_STRUCTURE, len(PROLOGUE) + 2 + MAX_NESTING, "IF n == 1 THEN")
+
+
+def test_an_automatic_array_larger_than_the_stack_stops_the_program_at_its_start():
+    # [000] "Stack Space Required by a Subroutine": AUTO arrays live on the stack.
+    err = outcome(["AUTO REAL a[1E30]", "x = 1"])
+    assert_located(err, msg.TOO_MANY_CALLS, 1, ".PROGRAM t()")
+
+
+def test_a_source_that_is_not_a_file_is_refused_without_reading_it(tmp_path):
+    import os
+
+    from twin.language.vplus.parser import parse_file
+
+    fifo = tmp_path / "prog.pg"
+    os.mkfifo(fifo)  # reading it would wait for a writer for ever
+    with pytest.raises(ProgramError) as caught:
+        parse_file(fifo)
+    assert caught.value.file == str(fifo) and "not a file" in str(caught.value)
+    with pytest.raises(ProgramError):
+        parse_file(tmp_path)
 
 
 def test_a_utf8_byte_order_mark_is_accepted(tmp_path):

@@ -24,6 +24,10 @@ error (a typo must never pass silently). Example::
     output_contains = ["All done. 100 parts processed"]   # each string must occur
     output_excludes = ["*Undefined value*"]              # none of these may occur
 
+    [counts]                   # the report's counts (count or bounds), see twin/report.py
+    placed = 150               # created, picked, placed, missed, dropped
+    missed = 0
+
     [events]                   # number of events of each kind (count or bounds)
     collision = 0
     drop = { max = 1 }
@@ -61,7 +65,7 @@ except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
 from twin.outputs import write_atomically
-from twin.report import Report, ReportError
+from twin.report import COUNT_NAMES, Report, ReportError
 
 __all__ = ["check", "evaluate", "load_expect", "main_check", "ExpectError", "Outcome"]
 
@@ -173,6 +177,7 @@ SECTIONS = {
     "parts": {"total", "dropped", "unplaced"},
     "time": {"sim_time_s", "wall_time_s", "realtime_factor", "cycle_time_s", "place_regions"},
     "program": {"errors", "output_contains", "output_excludes"},
+    "counts": set(COUNT_NAMES),
     "events": None,    # free names
 }
 
@@ -229,6 +234,19 @@ def _compile(expect: dict) -> list[Check]:
                 return None
             return text.format(n=_plural(n, noun), b=b.describe())
         checks.append(("parts", f"{key} = {b.written()}", part_check))
+
+    # [counts]
+    for key, value in expect.get("counts", {}).items():
+        b = _bounds(f"counts.{key}", value, integer=True, allow_bare=True)
+
+        def count_check(r: Report, key=key, b=b) -> str | None:
+            if r.counts is None:
+                return f"the report has no counts (written by a twin without them); expected {key} {b.describe()}"
+            n = r.counts[key]
+            if b.holds(n):
+                return None
+            return f"{_plural(n, 'part')} {key}, expected {b.describe()}"
+        checks.append(("counts", f"{key} = {b.written()}", count_check))
 
     # [time]
     time = expect.get("time", {})

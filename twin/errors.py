@@ -78,6 +78,12 @@ class ProgramError(Exception):
         }
 
 
+class SceneError(ProgramError):
+    """A scene file that cannot describe a cell (bad TOML, unknown section or key, wrong
+    type, impossible value, missing reference): a user error without a controller code,
+    so `twin run` prints it (file: key path: what was expected) and exits 2."""
+
+
 # Exit statuses of the command line (README, "Command line").
 EXIT_OK = 0
 EXIT_PROGRAM_ERROR = 1  # the program stopped on an error (or a runaway was stopped)

@@ -14,8 +14,11 @@ Layout (``Report.to_json``)::
       "output": "...",                  # everything the program TYPEd, exactly
       "errors": [ {"code": -413, "message": "*Undefined value*",
                    "file": "move_parts.pg", "line": 12, "column": 5, "time": 3.2} ],
-      "parts": [ {"id": 0, "pose": [x, y, z, qw, qx, qy, qz], "region": "bin", "dropped": false} ],
+      "parts": [ {"id": 0, "type": "block", "pose": [x, y, z, qw, qx, qy, qz], "region": "tray",
+                  "dropped": false, "picked": true, "missed": false, "tray": "tray", "cell": 3} ],
       "regions": {"bin": 100, "nest": 0},
+      "counts": {"created": 101, "picked": 100, "placed": 100, "missed": 0, "dropped": 0},
+      "components": {"conveyor.infeed": {"speed_mm_s": 100.0, "travel_mm": 30000.0, ...}},
       "events": [ {"time": 12.5, "kind": "drop", ...free fields...} ],
       "cycle_times_s": [0.61, 0.58]
     }
@@ -33,6 +36,22 @@ scene does not have is reported as a typo rather than silently read as 0.
 Pass ``regions=None`` (the default) to derive the counts from ``parts``; extra
 names with a count of 0 may be given, and any other disagreement with ``parts``
 is an error.
+
+Parts: one entry per part instance the cell brought in (a feeder's present, a source's
+spawn), in order; ``id`` is the instance's number (a pooled body that comes back is a new
+instance). Required keys: ``id``, ``pose``, ``region`` (where it ended, or where it was
+when its body was taken back), ``dropped`` (fell or was let go outside a place region).
+Optional: ``type`` (the scene's part type), ``picked`` (a gripper held it at least once),
+``missed`` (it left a conveyor, or a program's window, without being picked), ``tray`` and
+``cell`` (the tray's name and the 0-based cell index, row * cols + col, when it lies in
+a tray cell).
+
+Counts: ``counts`` (optional; the cell writes it) has ``created`` (parts brought in),
+``picked``, ``placed`` (ended in a place region, neither dropped nor missed), ``missed``
+and ``dropped``: non-negative integers, checkable as ``[counts]`` in an expectation file.
+``components`` (optional) holds each cell component's own figures, keyed
+``<kind>.<name>`` (free fields: a conveyor's speed, travel and encoder count, a sensor's
+breaks, a tray's cell centres...).
 
 Events: each event is an object with at least ``time`` (seconds, may be null)
 and ``kind`` (a short word: "drop", "collision", "grasp", ...); other fields are
@@ -53,7 +72,7 @@ from .outputs import write_atomically
 
 FORMAT_VERSION = 1
 
-__all__ = ["Report", "ReportError", "count_regions", "FORMAT_VERSION"]
+__all__ = ["Report", "ReportError", "count_regions", "COUNT_NAMES", "FORMAT_VERSION"]
 
 
 class ReportError(Exception):
@@ -66,6 +85,10 @@ def count_regions(parts: list[dict]) -> dict[str, int]:
     counts.pop(None, None)
     return dict(sorted(counts.items()))
 
+
+_PART_REQUIRED = {"id", "pose", "region", "dropped"}
+_PART_OPTIONAL = {"type": (str,), "picked": (bool,), "missed": (bool,), "tray": (str,), "cell": (int,)}
+COUNT_NAMES = ("created", "picked", "placed", "missed", "dropped")
 
 _ERROR_KEYS = {"code": (int, type(None)), "message": (str,), "file": (str, type(None)),
                "line": (int, type(None)), "column": (int, type(None)),
@@ -86,6 +109,8 @@ class Report:
     regions: dict[str, int] | None = None
     events: list[dict] = field(default_factory=list)
     cycle_times_s: list[float] = field(default_factory=list)
+    counts: dict[str, int] | None = None
+    components: dict[str, dict] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         _validate(self)
@@ -193,8 +218,12 @@ def _validate(r: Report) -> None:
     need(isinstance(r.parts, list), "parts must be a list")
     for i, p in enumerate(r.parts):
         need(isinstance(p, dict), f"parts[{i}] must be an object")
-        need(set(p) == {"id", "pose", "region", "dropped"},
-             f"parts[{i}] must have exactly the keys id, pose, region, dropped (has {', '.join(sorted(p))})")
+        need(_PART_REQUIRED <= set(p) <= _PART_REQUIRED | set(_PART_OPTIONAL),
+             f"parts[{i}] must have the keys id, pose, region, dropped and may have "
+             f"{', '.join(_PART_OPTIONAL)} (has {', '.join(sorted(p))})")
+        for key, types in _PART_OPTIONAL.items():
+            need(key not in p or (isinstance(p[key], types) and (bool in types or not isinstance(p[key], bool))),
+                 f"parts[{i}].{key} has the wrong type ({p.get(key)!r})")
         need(isinstance(p["id"], int) and not isinstance(p["id"], bool), f"parts[{i}].id must be an integer")
         need(isinstance(p["pose"], list) and len(p["pose"]) == 7 and all(_is_num(v) for v in p["pose"]),
              f"parts[{i}].pose must be 7 numbers [x, y, z (mm), qw, qx, qy, qz]")
@@ -206,6 +235,12 @@ def _validate(r: Report) -> None:
         need(isinstance(r.regions, dict) and all(
             isinstance(k, str) and isinstance(v, int) and not isinstance(v, bool) and v >= 0
             for k, v in r.regions.items()), "regions must map names to part counts")
+    if r.counts is not None:
+        need(isinstance(r.counts, dict) and set(COUNT_NAMES) <= set(r.counts) and all(
+            isinstance(k, str) and isinstance(v, int) and not isinstance(v, bool) and v >= 0
+            for k, v in r.counts.items()), f"counts must map at least {', '.join(COUNT_NAMES)} to part counts")
+    need(isinstance(r.components, dict) and all(isinstance(v, dict) for v in r.components.values()),
+         "components must map names to objects")
     need(isinstance(r.events, list), "events must be a list")
     for i, ev in enumerate(r.events):
         need(isinstance(ev, dict) and isinstance(ev.get("kind"), str),

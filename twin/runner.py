@@ -215,11 +215,13 @@ def finish_run(started: StartedRun, outcome) -> RunResult:
             replace_output(sim.recorder.path, started.rrd_path)
 
     events = [{"time": e.get("t"), **{k: v for k, v in e.items() if k != "t"}} for e in sim.cell.events]
+    parts = sim.cell.parts_report()
     report = Report(
         program=str(program), scene=str(scene), seed=sim.cell.seed,
         sim_time_s=round(outcome.sim_time_s, 6), wall_time_s=round(outcome.wall_time_s, 3),
-        output=system.console.output, errors=outcome.errors, parts=sim.cell.parts_report(),
-        regions=sim.cell.region_counts(), events=events, cycle_times_s=cycle_times(events),
+        output=system.console.output, errors=outcome.errors, parts=parts,
+        regions=sim.cell.region_counts(parts), events=events, cycle_times_s=cycle_times(events),
+        counts=sim.cell.counts(parts), components=sim.cell.components_report(),
     )
     if report_path is not None:
         report.write(report_path)

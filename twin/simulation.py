@@ -41,7 +41,8 @@ class Simulation:
 
     def __init__(self, scene: str | Path = DEFAULT_SCENE, seed: int | None = None, recorder=None):
         self.scene_path = Path(scene)
-        self.cell = Cell.from_scene(self.scene_path, seed=seed)
+        self.io = DigitalIO()  # the controller's signals; the cell's components read and drive them
+        self.cell = Cell.from_scene(self.scene_path, seed=seed, io=self.io)
         self.kinematics = self.cell.kinematics
         controller_cfg = self.cell.scene.get("controller", {})
         settings = MotionSettings(
@@ -51,7 +52,6 @@ class Simulation:
             ),
         )
         self.controller = VirtualController(self.cell, self.kinematics, settings)
-        self.io = DigitalIO()
         self.scheduler = Scheduler()
         self.recorder = recorder
         self._events_recorded = 0  # cell events already sent to the recorder
@@ -109,6 +109,9 @@ class Simulation:
                 error = self._stop_for_collision(collisions[0])
                 if error is not None:  # no program was running to take it
                     errors.append(error.as_dict(cell.time))
+            fault = controller.take_fault()  # the robot stopped by itself (a belt window violation)
+            if fault is not None and self._give_to_tasks(fault) is not None:
+                errors.append(fault.as_dict(cell.time))
             if program_end is None:
                 runaway = self._watch(watchdog, self.clock_reads == reads, alive)
                 if runaway is not None:
@@ -156,6 +159,7 @@ class Simulation:
         self._events_recorded = len(events)
         if recorder.wants_frame(cell.time):
             recorder.sample(cell.time, cell.data)
+            cell.record(recorder)
 
     def _stop_for_collision(self, collision: dict) -> ProgramError | None:
         """The robot hit something: it stops where it is, and each running program stops with
@@ -164,13 +168,18 @@ class Simulation:
         turn errors into its own report)."""
         self.controller.halt()
         text = f"*Collision detected* {collision['robot_geom']} with {collision['with']}"
+        return self._give_to_tasks(ProgramError(text, COLLISION))
+
+    def _give_to_tasks(self, error: ProgramError) -> ProgramError | None:
+        """Each running program stops with `error` at the step it is executing; returns the
+        error when no program took it."""
         taken = False
         for task in [task for task in self.scheduler.tasks if not task.finished]:
             try:
-                task.generator.throw(ProgramError(text, COLLISION))  # one each: it gets located
+                task.generator.throw(ProgramError(error.message, error.code))  # one each: it gets located
                 taken = True
             except StopIteration:
                 taken = True
             except ProgramError:
                 task.finished = True
-        return None if taken else ProgramError(text, COLLISION)
+        return None if taken else error

@@ -35,12 +35,33 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import ProgramError
+from .belt import BeltLocation, BeltMonitor
 from .kinematics import KinematicsError, RobotKinematics
 from .location import NULL, Location
+from .tracking import BeltPath, Tracking
 from .trajectory import Trajectory, plan_joint_move, plan_straight_move
 
 NULLING_TIMEOUT = -1003  # V+ "*Time-out nulling errors*" (V+ guide v17 L5832)
 COLLISION = -1020  # "*Collision detected*": twin-defined (the real controller does not see the cell)
+# The belt reference of a step is the encoder reading of that step: the position servo with
+# velocity feed-forward follows it within a few hundredths of a mm (measured: a lead of one
+# step puts the tool 0.2 mm ahead of the part at 100 mm/s).
+BELT_LEAD_STEPS = 0
+TRACKING_FINE_MM = 0.1  # FINE while tracking a belt: the flange's distance from its moving target
+# Conveyor tracking errors: the guides name them without codes; twin-chosen (docs/vplus.md).
+BELT_WINDOW_VIOLATION = -1014
+BELT_JOINT_MOTION = -1015
+BELT_NOT_ENABLED = -1016
+BELT_WINDOW_MESSAGE = "*Belt window violation*"
+BELT_JOINT_MESSAGE = "*Illegal joint motion from/to belt*"
+# BELT.MODE bits (docs/vplus.md): 2 an upstream destination is an error instead of a wait,
+# 4 no look-ahead (a motion's destination is tested where it is when planned), 8 no window
+# test while the tool tracks the belt (only when motions are planned).
+BELT_MODE_UPSTREAM_ERROR = 2
+BELT_MODE_NO_PREDICTION = 4
+BELT_MODE_NO_TRACKING_TEST = 8
+# BSTATUS bits (docs/vplus.md): tracking, destination upstream (waiting), downstream, violation.
+BSTATUS_TRACKING, BSTATUS_UPSTREAM, BSTATUS_DOWNSTREAM, BSTATUS_VIOLATION = 1, 2, 4, 8
 NULLING_TIMEOUT_S = 2.0  # how long the servos may take to settle after a move
 BLEND_SLACK = 1.02  # blends may reach the joint limits within the planner's own tolerance
 COARSE_FACTOR = 5.0  # COARSE tolerance / FINE tolerance (SPEC: "normally 2 to 10 times" FINE)
@@ -170,6 +191,7 @@ class _Motion:
         self.decel_steps = int(round(trajectory.decel_time / dt))
         self.start = 0
         self.started = False
+        self.belt: BeltPath | None = None  # set for a motion to or from a belt
 
     @property
     def end(self) -> int:
@@ -223,6 +245,12 @@ class VirtualController:
         self.dt = cell.timestep
         self.lookahead = max(1, int(round(TRAJECTORY_CYCLE_S / self.dt)))
         self.step = 0  # index of the next physics step to command
+        self.belts = BeltMonitor(cell, self.dt)
+        self._belt_lead = BELT_LEAD_STEPS * self.dt
+        self.tracking: Tracking | None = None  # the belt location the tool follows
+        self._qd_tracking = np.zeros(len(cell.robot_qpos()))  # its joint speeds, last step
+        self.belt_status = 0  # BSTATUS bits
+        self.fault: ProgramError | None = None  # an error the robot raised by itself (window violation)
         self.q_command = np.array(cell.robot_qpos(), dtype=float)
         self._anchor = self.q_command.copy()  # reference before the motions on the timeline
         self._motions: list[_Motion] = []  # started or about to start, in time order
@@ -265,8 +293,8 @@ class VirtualController:
         T[:3, 3] /= MM
         return T
 
-    def destination(self) -> Location:
-        """DEST: where the robot was last told to go."""
+    def destination(self) -> Location | BeltLocation:
+        """DEST: where the robot was last told to go (a belt location while it tracks one)."""
         return self._destination
 
     def here(self) -> Location:
@@ -399,13 +427,31 @@ class VirtualController:
         if self._motions:
             return False
         tolerance = self.fine if tolerance is None else tolerance
+        if self.tracking is not None:
+            return self._on_the_part(float(np.max(tolerance / self.fine)))
         return bool(np.all(np.abs(self.cell.robot_qpos() - self.q_command) <= tolerance))
+
+    def _on_the_part(self, looser: float) -> bool:
+        """Nulled while tracking: the flange within TRACKING_FINE_MM (times `looser` for
+        COARSE) of where the servos are taking it, one step ahead of the last reference.
+        The wrist is left out: its counter-rotation lags by what its joint damping costs
+        (docs/motion.md), which does not move the tool tip."""
+        target = self.kin.fk(self.q_command + self._qd_tracking * self.dt)[:3, 3]
+        error = np.linalg.norm(self.kin.fk(self.cell.robot_qpos())[:3, 3] - target) * MM
+        return bool(error <= TRACKING_FINE_MM * looser)
 
     # ------------------------------------------------------------ motion
     def move(self, target, straight: bool, cp: bool = True):
         """Plan and start a motion to `target` (a Location, or joint values in V+ units for a
         precision point), after the motion in progress has reached its blend point.
         `cp` is the state of the CP switch."""
+        if isinstance(target, BeltLocation) or self.tracking is not None or self._belt_motion() is not None:
+            # No blending into or out of a belt motion: the next one waits for it to end.
+            if self._motions:
+                yield self._motion_done
+            if isinstance(target, BeltLocation) or self.tracking is not None:
+                yield from self._belt_move(target, straight)
+                return
         yield from self._wait_for_queue(cp)
         params = self.settings.take()
         righty, self._righty_request = self._righty_request, None
@@ -436,6 +482,103 @@ class VirtualController:
         except KinematicsError as err:
             raise ProgramError(err.message, err.code) from None
         yield from self._launch(trajectory, params, destination, cp, straight and isinstance(target, Location))
+
+    # ------------------------------------------------------------ belts
+    @property
+    def following_belt(self) -> bool:
+        """The tool is on a belt location, following it (not on its way there or off it)."""
+        return self.tracking is not None and self._belt_motion() is None
+
+    def _belt_motion(self) -> _Motion | None:
+        return next((m for m in self._motions if m.belt is not None), None)
+
+    def _belt_move(self, target, straight: bool):
+        """A straight-line motion to or from a belt location (module doc of tracking.py).
+        The window is tested first: a destination not yet in the window is waited for
+        (an error with BELT.MODE bit 2); one past it, now or by the time the motion would
+        get there, is a window violation."""
+        if not straight or not isinstance(target, (Location, BeltLocation)):
+            raise ProgramError(BELT_JOINT_MESSAGE, BELT_JOINT_MOTION)
+        if isinstance(target, BeltLocation):
+            if not (yield from self._await_window(target, 0.0)):
+                return
+        params = self.settings.take()
+        start = self.tracking
+        q0 = self.q_command.copy()
+        tip, tool = self._tip_matrix_m(_world(target)), self._tool_m()
+        try:
+            trajectory = plan_straight_move(self.kin, q0, tip, self.kin.max_velocity, self.kin.max_acceleration,
+                                            params.cartesian_speed_m_s, accel=params.accel, decel=params.decel,
+                                            tool=tool)
+        except KinematicsError as err:
+            raise ProgramError(err.message, err.code) from None
+        trajectory = trajectory.stretched(max(trajectory.duration * params.time_scale, params.duration_s,
+                                              TRAJECTORY_CYCLE_S))
+        if isinstance(target, BeltLocation):
+            ahead = 0.0 if target.belt.mode & BELT_MODE_NO_PREDICTION else trajectory.duration
+            if not (yield from self._await_window(target, ahead)):
+                return
+        self.tracking = None
+        self._anchor = q0
+        self._q_planned = q0
+        motion = _Motion(trajectory, self.dt, params, target, self._hand_request)
+        motion.belt = BeltPath(self.kin, motion.q, self.dt, self.base, None if start is None else start.where,
+                               target if isinstance(target, BeltLocation) else None)
+        self._hand_request = None
+        yield from self._launch_motion(motion, trajectory, params, target, cp=False, straight=True)
+
+    def _await_window(self, target: BeltLocation, ahead_s: float):
+        """True when `target` may be moved to; False after a violation handled by the program's
+        own routine.  Waits while it is upstream (BELT.MODE bit 2: an error instead)."""
+        state = target.window_state(ahead_s)
+        if state == "upstream":
+            if target.belt.mode & BELT_MODE_UPSTREAM_ERROR:
+                return self._violation(target, state, raising=True)
+            self.belt_status |= BSTATUS_UPSTREAM
+            yield lambda: target.window_state(ahead_s) != "upstream"
+            self.belt_status &= ~BSTATUS_UPSTREAM
+            state = target.window_state(ahead_s)
+        if state == "downstream":
+            return self._violation(target, state, raising=True)
+        return True
+
+    def _violation(self, where: BeltLocation, state: str, raising: bool) -> bool:
+        """A window violation: the robot stops; the belt's own routine is told (V+ WINDOW's
+        program), or else it is an error, raised here or (`raising` false, found by the
+        servo loop) left in `fault` for the simulation to give the running programs."""
+        self.belt_status |= BSTATUS_VIOLATION | (BSTATUS_DOWNSTREAM if state == "downstream" else BSTATUS_UPSTREAM)
+        self._stop_tracking()
+        if where.belt.on_violation is not None:
+            where.belt.on_violation(state)
+            return False
+        error = ProgramError(f"{BELT_WINDOW_MESSAGE} {where.belt.name or 'belt'}: destination {state} of the window",
+                             BELT_WINDOW_VIOLATION)
+        if raising:
+            raise error
+        self.fault = error
+        return False
+
+    def take_fault(self) -> ProgramError | None:
+        fault, self.fault = self.fault, None
+        return fault
+
+    def bstatus(self) -> int:
+        """BSTATUS: the tracking bits now (the violation bit is cleared by reading it)."""
+        tracking = BSTATUS_TRACKING if self.tracking is not None or self._belt_motion() is not None else 0
+        value = self.belt_status | tracking
+        self.belt_status &= ~BSTATUS_VIOLATION
+        return value
+
+    def _stop_tracking(self) -> None:
+        """The tool stops following its belt: it holds where it is now commanded."""
+        if self.tracking is None and self._belt_motion() is None:
+            return
+        self.tracking = None
+        self._motions = []
+        self._anchor = self.q_command.copy()
+        self._q_planned = self.q_command.copy()
+        self._destination = self._location_of(self.q_command)
+        self.cell.set_servo(self.q_command, np.zeros_like(self.q_command))
 
     def _check_overlap(self, q0: np.ndarray, q1: np.ndarray) -> None:
         """OVERLAP: a multi-turn joint (range over 360 deg) that would turn more than 180 deg,
@@ -543,6 +686,10 @@ class VirtualController:
         """Put a planned motion on the timeline and wait until it begins."""
         motion = _Motion(trajectory, self.dt, params, destination, self._hand_request)
         self._hand_request = None
+        yield from self._launch_motion(motion, trajectory, params, destination, cp, straight)
+
+    def _launch_motion(self, motion: _Motion, trajectory, params: MotionParameters, destination, cp: bool,
+                       straight: bool):
         start = self.step
         if self._motions:
             last = self._motions[-1]
@@ -621,7 +768,10 @@ class VirtualController:
         """A program error or BRAKE: the robot decelerates to a stop on its path.  Motions not yet
         begun are dropped; one already in its final deceleration (as a motion is when the
         next one fails to plan) goes on to its destination; one at speed slows down along
-        its path over its own deceleration time."""
+        its path over its own deceleration time.  A robot on a belt stops following it."""
+        if self.tracking is not None or self._belt_motion() is not None:
+            self._stop_tracking()
+            return
         self._motions = [m for m in self._motions if m.started]
         for m in self._motions:
             m.brake(self.step - m.start, self.lookahead)
@@ -633,6 +783,7 @@ class VirtualController:
         the measured position."""
         q = self.cell.robot_qpos()
         self._motions = []
+        self.tracking = None
         self._anchor = q.copy()
         self._q_planned = q.copy()
         self.q_command = q.copy()
@@ -641,13 +792,18 @@ class VirtualController:
 
     def servo_step(self) -> None:
         """Feed this physics step's references to the servos: the superposition of the
-        motions on the timeline (two only while they blend)."""
+        motions on the timeline (two only while they blend), moved with the belt when the
+        motion goes to or from one or the tool tracks one."""
+        self.belts.sample()
         motions = self._motions
         n = self.step
         self.step = n + 1
         if not motions:
+            if self.tracking is not None:
+                self._track()
             return
         q, qd, qdd = self._anchor, None, None
+        belt, k_belt = None, 0
         for m in motions:
             k = n - m.start
             if k < 0:
@@ -657,18 +813,71 @@ class VirtualController:
                 if m.hand is not None:
                     self.hand(m.hand)
             k = min(k, m.last)
+            if m.belt is not None:
+                belt, k_belt = m, k
             if qd is None:
                 q, qd, qdd = q + m.delta[k], m.qd[k], m.qdd[k]
             else:
                 q, qd, qdd = q + m.delta[k], qd + m.qd[k], qdd + m.qdd[k]
+        if belt is not None:
+            q, qd = self._belt_reference(belt, k_belt, q, qd)
+            if q is None:
+                return
+        elif self.tracking is not None:  # DELAY while tracking: the tool stays on the part
+            self._track()
+            qd = None
         if qd is not None:
             self.q_command = q
             self.cell.set_servo(q, qd, qdd)
         while motions and motions[0].end <= n:
-            self._anchor = self._anchor + motions[0].delta[-1]
-            motions.pop(0)
-        if not motions:
+            done = motions.pop(0)
+            self._anchor = self._anchor + done.delta[-1]
+            if done.belt is not None:
+                self._arrived(done)
+        if not motions and self.tracking is None:
             self.q_command = self._anchor.copy()
+
+    def _belt_reference(self, motion: _Motion, k: int, q, qd):
+        """The planned reference of a belt motion moved with its belts; a window violation
+        of its destination stops it (None)."""
+        end = motion.belt.end
+        if end is not None and not end.belt.mode & BELT_MODE_NO_TRACKING_TEST and \
+                end.window_state() == "downstream":
+            self._violation(end, "downstream", raising=False)
+            return None, None
+        try:
+            return motion.belt.reference(k, q, qd, self.q_command, self._belt_lead)
+        except KinematicsError as err:
+            self._stop_tracking()
+            self.fault = ProgramError(err.message, err.code)
+            return None, None
+
+    def _arrived(self, motion: _Motion) -> None:
+        """A belt motion is over: the tool tracks its destination, or it is off the belt."""
+        end = motion.belt.end
+        if end is None:
+            self.tracking = None
+            return
+        self.tracking = Tracking(self.kin, end, self._flange_matrix_m(end.instantaneous()), self.base)
+        self._destination = end
+
+    def _track(self) -> None:
+        """No motion: the tool follows its belt location; a window violation stops it."""
+        where = self.tracking.where
+        if not where.belt.mode & BELT_MODE_NO_TRACKING_TEST and where.window_state() == "downstream":
+            self._violation(where, "downstream", raising=False)
+            return
+        try:
+            q, qd = self.tracking.reference(self.q_command, self._belt_lead)
+        except KinematicsError as err:
+            self._stop_tracking()
+            self.fault = ProgramError(err.message, err.code)
+            return
+        # Joint accelerations change as the arm turns while the tool runs straight: fed forward.
+        qdd = (qd - self._qd_tracking) / self.dt
+        self.q_command = q
+        self._qd_tracking = qd
+        self.cell.set_servo(q, qd, qdd)
 
     # ------------------------------------------------------------ hand
     def hand_at_next_motion(self, state: str) -> None:
@@ -708,3 +917,8 @@ class _Still(Trajectory):
         n = int(math.ceil(self.duration / dt - 1e-9)) + 1
         shape = (n, len(self.q_start))
         return None, np.broadcast_to(self.q_start, shape), np.broadcast_to(np.zeros(shape[1]), shape)
+
+
+def _world(target) -> Location:
+    """A motion's destination as a location now (a belt location where its belt is now)."""
+    return target.instantaneous() if isinstance(target, BeltLocation) else target

@@ -206,6 +206,7 @@ class While(Statement):
 class DoUntil(Statement):
     body: list[Statement]
     condition: Expr
+    until: Statement | None = None  # the UNTIL step, where an error in the condition is located
 
 
 @dataclass

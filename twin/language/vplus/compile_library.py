@@ -99,6 +99,8 @@ class LibraryStatements:
                 if not isinstance(v, ast.Var) or v.indices is None:
                     raise self.error(s, msg.INVALID_ARGUMENT, f"{s.name} needs an array")
                 passed.append(self.array_ref(v))
+            elif i in spec.name_values and isinstance(v, ast.Var) and v.indices is None:
+                passed.append(repr(v.name))
             else:
                 passed.append(self.checked(v, argument_check(spec.function, i), s.name))
         writes = []  # (position, variable) of the plain variables the instruction sets

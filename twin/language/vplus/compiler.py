@@ -94,6 +94,7 @@ class CompiledProgram:
     function: object = None  # the generator function, set by the loader
     statement_count: int = 0
     frame_bytes: int = 20  # stack bytes of a call besides its arguments: 20 and the AUTO variables
+    line: int = 0  # the .PROGRAM line
 
 
 def is_string(expr: ast.Expr) -> bool:
@@ -234,7 +235,7 @@ class ProgramCompiler(LibraryStatements):
             self.block(p.body, 1)
             self.emit_return(1)
         return CompiledProgram(p.name, "\n".join(self.lines) + "\n", self.line_map, p.file, p.params,
-                               statement_count=self.count, frame_bytes=20 + self.auto_bytes(p.body))
+                               statement_count=self.count, frame_bytes=20 + self.auto_bytes(p.body), line=p.line)
 
     def auto_bytes(self, body: list[ast.Statement]) -> int:
         """Stack bytes of the AUTO variables ([000] "Stack Space Required by a Subroutine"):
@@ -248,8 +249,8 @@ class ProgramCompiler(LibraryStatements):
                 prefix = var.name[0]
                 size = (132 if prefix == "$" else 24 if prefix == "#" else 8 if statement.double
                         else 48 if statement.kind == "LOC" else 4)
-                for d in dims or []:
-                    size *= int(d.value) + 1 if isinstance(d, ast.Num) and 0 <= d.value < 1e9 else 1
+                for d in dims or []:  # an absurd size is simply more than any stack holds
+                    size *= int(min(d.value, 1e9)) + 1 if isinstance(d, ast.Num) and d.value >= 0 else 1
                 total += size
         return total
 
@@ -385,7 +386,7 @@ class ProgramCompiler(LibraryStatements):
             if e.op == "-":
                 return f"(-{self.expr(e.operand)})"
             if e.op == "NOT":
-                return f"(0.0 if {self.expr(e.operand)} else -1.0)"
+                return f"(-1.0 if {self.condition(e)} else 0.0)"
             return f"_com({self.expr(e.operand)})"
         if isinstance(e, ast.Binary):
             return self.binary(e)
@@ -429,7 +430,9 @@ class ProgramCompiler(LibraryStatements):
                 return f"(bool({self.condition(e.left)}) != bool({self.condition(e.right)}))"
         if isinstance(e, ast.Unary) and e.op == "NOT":
             return f"(not {self.condition(e.operand)})"
-        return f"({self.expr(e)} != 0)"
+        if isinstance(e, ast.Num):
+            return f"({self.expr(e)} != 0)"
+        return f"(_real({self.expr(e)}) != 0)"  # a location is no truth value: *Wrong data type*
 
     def call(self, e: ast.Call) -> str:
         if e.name == "DEFINED":
@@ -521,7 +524,7 @@ class ProgramCompiler(LibraryStatements):
         """The Python expression that stores `value` into a real variable:
         DOUBLE variables keep 64 bits, the others are single precision."""
         key = self.key(target)
-        return f"_double({value})" if key in self.scope.doubles else f"_single({value})"
+        return f"_real({value})" if key in self.scope.doubles else f"_single({value})"
 
     def s_SetLocation(self, s: ast.SetLocation, depth: int) -> None:
         self.check_kind(s.target, "LOC")
@@ -609,7 +612,7 @@ class ProgramCompiler(LibraryStatements):
         self.emit(depth, "while True:")
 
         def tail(d: int) -> None:
-            self.current = s
+            self.current = s.until or s
             self.wait_for_input(s.condition, d)
             self.emit(d, f"if {self.condition(s.condition)}: break")
             self.slice_check(d)
@@ -735,7 +738,7 @@ class ProgramCompiler(LibraryStatements):
         top, test, end = self.mark(), self.mark(), self.mark()
         ops.append(_Op("mark", s, target=top))
         self.lower_loop(s, ops, test, end)
-        ops.append(_Op("branch", s, target=top, condition=f"not {self.condition(s.condition)}",
+        ops.append(_Op("branch", s.until or s, target=top, condition=f"not {self.condition(s.condition)}",
                        waits_on=s.condition))
         ops.append(_Op("mark", s, target=end))
 

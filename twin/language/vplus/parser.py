@@ -369,6 +369,8 @@ def parse(text: str, file: str = "<string>") -> ast.Module:
 
 def parse_file(path: str | Path) -> ast.Module:
     path = Path(path)
+    if path.exists() and not path.is_file():  # a folder, a FIFO or a device: nothing to load, never a hang
+        raise ProgramError(f"*Invalid file specification* {path} is not a file", file=str(path))
     try:
         data = path.read_bytes()
     except OSError:

@@ -320,7 +320,11 @@ class Task(TaskControl):
         frame = compiled.frame_bytes + sum(ARGUMENT_BYTES + _value_bytes(a) for a in args)
         stack = STACK_BYTES[self.system.dialect]
         if self.stack_used + frame > stack:
-            raise ProgramError(f"{msg.message(msg.TOO_MANY_CALLS)} (a {stack // 1024} KB stack)", msg.TOO_MANY_CALLS)
+            err = ProgramError(f"{msg.message(msg.TOO_MANY_CALLS)} (a {stack // 1024} KB stack)", msg.TOO_MANY_CALLS)
+            if not self.stack_used:  # the task's own program: no CALL step to blame, its .PROGRAM line
+                err.located(file=compiled.file, line=compiled.line, column=1, step=1, program=name,
+                            text=self.system.source_line(compiled.file, compiled.line))
+            raise err
         self.stack_used += frame
         try:
             return (yield from compiled.function(self, args))

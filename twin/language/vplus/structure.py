@@ -82,7 +82,7 @@ class _Nester:
             return ast.While(s.condition, body, **where)
         if isinstance(s, ast.DoHead):
             body, stop = self.require(s, (ast.UntilTail,), "UNTIL")
-            return ast.DoUntil(body, stop.condition, **where)
+            return ast.DoUntil(body, stop.condition, stop, **where)
         if isinstance(s, ast.CaseHead):
             return self.case(s, where)
         return s

@@ -22,6 +22,7 @@ from ...controller.scheduler import RELEASE, SLICES
 from ...errors import ProgramError
 from . import messages as msg
 from . import values
+from .parser import normalize_name
 
 TASKS = 28  # tasks 0..27 (0..6 without the V+ Extensions), [000] L1364
 ERROR_TRAP_PRIORITY = 254  # program priority inside a REACTE routine, [000] L1340
@@ -74,7 +75,7 @@ CHECK = _Check()
 
 @dataclass
 class Reaction:
-    signal: int  # positive: react to off -> on; negative: on -> off
+    signal: int | None  # positive: react to off -> on; negative: on -> off; None: a belt window
     program: str | None  # None: REACTI signal alone stops the robot and calls nothing
     args: list
     priority: int
@@ -172,6 +173,8 @@ class TaskControl:
         """Sample the reaction signals: a transition is seen at the next major
         cycle ([000] L4627-4628); it also sets the task's event flag."""
         for reaction in self.reactions.values():
+            if reaction.signal is None:  # a belt window reaction: the controller triggers it
+                continue
             level = self.io.sig(abs(reaction.signal))
             if level != reaction.level and level == (reaction.signal > 0):
                 reaction.triggered = True
@@ -198,9 +201,19 @@ class TaskControl:
     def _react(self, reaction: Reaction) -> Iterator:
         """Fire `reaction`: it runs at its own program priority.  A reaction
         fires once; the routine re-enables itself if it wants more ([000] L4640)."""
-        del self.reactions[abs(reaction.signal)]
+        self.reactions = {key: r for key, r in self.reactions.items() if r is not reaction}
         saved, self.program_priority = self.program_priority, reaction.priority
         return self._restoring(self.call(reaction.program, list(reaction.args)), saved)
+
+    def window_reaction(self, program: str, priority: int):
+        """WINDOW %belt = ..., program, priority: a window violation calls `program` like a
+        reaction, at `priority`, whatever the task is doing (the robot has stopped)."""
+        def violated(state: str) -> None:
+            self.reactions[("WINDOW", program)] = Reaction(None, normalize_name(program), [], priority,
+                                                           False, False, triggered=True)
+            self.event = True
+
+        return violated
 
     def _restoring(self, routine: Iterator, priority: int) -> Iterator:
         try:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import struct
 
+from ...controller.belt import BeltFrame, BeltLocation
 from ...controller.location import Location
 from ...errors import ProgramError
 from . import messages as msg
@@ -92,18 +93,14 @@ def _real(value) -> float:
     """A real argument or value: a string, location, precision point or array is
     *Wrong data type*."""
     if isinstance(value, float):
-        return value
+        if value - value == 0.0:  # finite
+            return value
+        # An infinity from 64-bit arithmetic inside an expression (a single store rounds
+        # but does not check it, to keep stores cheap): any use of it is an overflow.
+        raise fail(msg.OVERFLOW, "beyond the range of a real")
     if isinstance(value, int):
         return float(value)
     raise fail(msg.WRONG_TYPE, "real value expected")
-
-
-def _double(value) -> float:
-    """Store into a DOUBLE variable: a real within the double range."""
-    value = _real(value)
-    if not math.isfinite(value):
-        raise fail(msg.OVERFLOW, "beyond the range of a DOUBLE")
-    return value
 
 
 def single(value: float) -> float:
@@ -115,10 +112,7 @@ def single(value: float) -> float:
 def _single(value) -> float:
     """Store into a real variable: a real, rounded to single precision."""
     try:
-        stored = _SINGLE.unpack(_SINGLE.pack(value))[0]
-        if stored - stored != 0.0:  # an infinity or NaN from 64-bit arithmetic inside the expression
-            raise OverflowError
-        return stored
+        return _SINGLE.unpack(_SINGLE.pack(value))[0]
     except OverflowError:
         raise fail(msg.OVERFLOW, f"{value:g} is beyond single precision") from None
     except struct.error:
@@ -138,14 +132,17 @@ def _argument(value, kind: str, name: str):
 
 
 def _location(value) -> Location:
+    """A transformation; a belt location (%belt:loc) is where its belt has it now."""
+    if isinstance(value, BeltLocation):
+        return value.instantaneous()
     if not isinstance(value, Location):
         raise fail(msg.WRONG_TYPE, "location expected")
     return value
 
 
 def _point(value):
-    """Where a motion may go: a transformation or a precision point."""
-    if not isinstance(value, (Location, tuple)):
+    """Where a motion may go: a transformation, a precision point or a belt location."""
+    if not isinstance(value, (Location, tuple, BeltLocation)):
         raise fail(msg.WRONG_TYPE, "location expected")
     return value
 
@@ -175,7 +172,15 @@ def components(loc: Location) -> tuple[float, ...]:
     return x, y, z, yaw, pitch, roll
 
 
-def _compound(a, b) -> Location:
+def _compound(a, b) -> Location | BeltLocation:
+    """a:b.  A belt variable may only be the leftmost element: %belt:loc is a location
+    fixed to the belt (eV+ guide, "Belt-Relative Motion Instructions")."""
+    if isinstance(b, (BeltFrame, BeltLocation)):
+        raise fail(msg.ILLEGAL_OPERATION, "a belt variable must be the leftmost element of a compound location")
+    if isinstance(a, BeltFrame):
+        return BeltLocation(a, _location(b))
+    if isinstance(a, BeltLocation):
+        return a * _location(b)
     return _location(a) * _location(b)
 
 

@@ -106,4 +106,4 @@ def member(cls: type, name: str) -> str | None:
 
 
 # The classes register themselves on import.
-from . import console, files, latch, locations, modbus, motion, net, robot, signal, thread, xmldoc  # noqa: E402,F401
+from . import console, conveyor, files, locations, modbus, motion, net, robot, signal, thread, xmldoc  # noqa: E402,F401

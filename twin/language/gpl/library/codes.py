@@ -8,6 +8,7 @@ controller's style, most of them from -3100 down.  docs/gpl.md lists them all.
 
 from __future__ import annotations
 
+from ....controller.controller import BELT_JOINT_MOTION, BELT_WINDOW_VIOLATION
 from ....controller.controller import NULLING_TIMEOUT as VPLUS_NULLING_TIMEOUT
 from ....controller.kinematics import JOINT_LIMIT, LOCATION_OUT_OF_RANGE as VPLUS_OUT_OF_RANGE
 from ....controller.kinematics import STRAIGHT_LINE_CONFIG
@@ -43,6 +44,8 @@ SOCKET_TIMEOUT = (-3121, "Socket timeout")  # twin
 MODBUS_EXCEPTION = (-3130, "Modbus exception response")  # twin
 MODBUS_TIMEOUT = (-3131, "Modbus timeout")  # twin
 THREAD_ERROR = (-3140, "Invalid thread operation")  # twin
+CONVEYOR_LIMIT = (-3150, "Conveyor location outside the conveyor limits")  # twin
+CONVEYOR_JOINT_MOTION = (-3151, "Joint-interpolated motion to or from a conveyor")  # twin
 
 # Errors the shared controller raises with V+ codes, as GPL reports them.
 _FROM_VPLUS = {
@@ -50,6 +53,8 @@ _FROM_VPLUS = {
     JOINT_LIMIT: JOINT_OUT_OF_RANGE,
     STRAIGHT_LINE_CONFIG: STRAIGHT_CONFIG,
     VPLUS_NULLING_TIMEOUT: NULLING_TIMEOUT,
+    BELT_WINDOW_VIOLATION: CONVEYOR_LIMIT,
+    BELT_JOINT_MOTION: CONVEYOR_JOINT_MOTION,
 }
 
 

@@ -27,6 +27,7 @@ import numpy as np
 from ....controller.location import NULL, Location, trans
 from . import codes
 from . import gpl_class, shared
+from .conveyor import ConveyorFrame, conveyor_limit
 from .members import stored
 from .state import from_gpl_angles, solve_joints, to_gpl_angles, tool_pose
 
@@ -260,8 +261,18 @@ class GplLocation:
     def XYZValue(rt, x=0.0, y=0.0, z=0.0, yaw=0.0, pitch=0.0, roll=0.0) -> "GplLocation":
         return GplLocation.cartesian(rt, trans(*(_number(v) for v in (x, y, z, yaw, pitch, roll))))
 
-    def ConveyorLimit(self, *args):
-        raise codes.fail(codes.NOT_SUPPORTED, "Location.ConveyorLimit (conveyor tracking)")
+    def ConveyorLimit(self, mode=0) -> float:
+        """mm to the conveyor's downstream limit (mode 0) or past its upstream limit (mode
+        1), both positive inside the limits (docs/gpl.md, "Conveyor tracking")."""
+        self._cartesian()
+        conveyor = None if self._frame is None else self._frame.conveyor
+        if conveyor is None:
+            raise codes.fail(codes.INVALID_ARGUMENT, "ConveyorLimit needs a Location relative to a conveyor RefFrame")
+        return conveyor_limit(conveyor, self._pose, mode)
+
+    def on_conveyor(self) -> ConveyorFrame | None:
+        """The conveyor frame this Cartesian location is relative to, if any."""
+        return None if self._type != CARTESIAN or self._frame is None else self._frame.conveyor
 
     # ------------------------------------------------------------ motion helpers
     def clearance(self) -> Location:
@@ -294,8 +305,8 @@ def location_arg(value) -> GplLocation:
 
 @gpl_class("RefFrame")
 class GplRefFrame:
-    """A GPL reference frame: basic (Type 0) or pallet (Type 1).  Conveyor frames
-    (Type 2) need the conveyor-tracking option, which the twin does not model."""
+    """A GPL reference frame: basic (Type 0), pallet (Type 1) or conveyor (Type 2: its
+    position moves with the belt, conveyor.py)."""
 
     def __init__(self, rt, *args):
         if args:
@@ -308,6 +319,7 @@ class GplRefFrame:
         self._max_index = [1, 1, 1]
         self._pitch = [0.0, 0.0, 0.0]
         self._order = 123
+        self.conveyor: ConveyorFrame | None = None
 
     @property
     def Type(self) -> int:
@@ -316,11 +328,10 @@ class GplRefFrame:
     @Type.setter
     def Type(self, value) -> None:
         value = int(value)
-        if value == 2:
-            raise codes.fail(codes.NOT_SUPPORTED, "conveyor reference frames (conveyor tracking)")
-        if value not in (0, 1):
+        if value not in (0, 1, 2):
             raise codes.fail(codes.INVALID_ARGUMENT, f"RefFrame.Type {value}")
         self._type = value
+        self.conveyor = ConveyorFrame(self._rt) if value == 2 else None
 
     @property
     def Loc(self) -> GplLocation:
@@ -337,6 +348,8 @@ class GplRefFrame:
         """The frame's total (absolute) pose."""
         if depth > MAX_FRAME_DEPTH:
             raise codes.fail(codes.FRAME_LOOP)
+        if self.conveyor is not None:  # the belt's instantaneous position; Loc is not used
+            return self.conveyor.total()
         loc = self._loc
         loc._cartesian()
         base = loc._pose if loc._frame is None else loc._frame.total(depth + 1) * loc._pose
@@ -352,6 +365,8 @@ class GplRefFrame:
         return GplLocation.cartesian(self._rt, self.total())
 
     def PosWrtRef(self) -> GplLocation:
+        if self.conveyor is not None:  # the conveyor's nominal transformation
+            return GplLocation.cartesian(self._rt, self.conveyor.nominal())
         self._loc._cartesian()
         return GplLocation.cartesian(self._rt, self._loc._pose * self._pallet_offset())
 
@@ -360,6 +375,9 @@ class GplRefFrame:
         copy.__dict__.update(self.__dict__)
         copy._loc = self._loc.Clone()
         copy._index, copy._max_index, copy._pitch = list(self._index), list(self._max_index), list(self._pitch)
+        if self.conveyor is not None:
+            copy.conveyor = ConveyorFrame(self._rt)
+            copy.conveyor.robot, copy.conveyor.offset_mm = self.conveyor.robot, self.conveyor.offset_mm
         return copy
 
     # ------------------------------------------------------------ pallet members
@@ -425,10 +443,29 @@ class GplRefFrame:
         for dim, value in ((1, row), (2, column), (3, layer)):
             self.set_PalletIndex(dim, value)
 
-    def ConveyorOffset(self, *args):
-        raise codes.fail(codes.NOT_SUPPORTED, "conveyor reference frames (conveyor tracking)")
+    # ------------------------------------------------------------ conveyor members
+    def _on_conveyor(self) -> ConveyorFrame:
+        if self.conveyor is None:
+            raise codes.fail(codes.INVALID_ARGUMENT, "not a conveyor reference frame (Type 2)")
+        return self.conveyor
 
-    ConveyorRobot = ConveyorOffset
+    @property
+    def ConveyorOffset(self) -> float:
+        return self._on_conveyor().offset_mm
+
+    @ConveyorOffset.setter
+    def ConveyorOffset(self, value) -> None:
+        self._on_conveyor().offset_mm = _number(value)
+
+    @property
+    def ConveyorRobot(self) -> int:
+        return self._on_conveyor().robot
+
+    @ConveyorRobot.setter
+    def ConveyorRobot(self, value) -> None:
+        conveyor = self._on_conveyor()
+        conveyor.robot = int(value)
+        conveyor.belt()  # a robot that is no conveyor is an error here
 
 
 def _dim(dim) -> int:

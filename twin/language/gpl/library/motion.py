@@ -32,6 +32,7 @@ from ....errors import ProgramError
 from . import codes
 from . import gpl_class, shared
 from .members import stored
+from .conveyor import belt_target
 from .locations import ANGLES, GplLocation, location_arg
 from .state import flange_pose, flange_target, from_gpl_angles, matrix_m, righty_of, robot_state
 
@@ -166,7 +167,10 @@ def _go_joints(rt, q: np.ndarray, profile):
 
 
 def _go_location(rt, loc: GplLocation, profile):
-    if loc.Type == ANGLES:
+    conveyor = loc.on_conveyor()
+    if conveyor is not None:  # the robot follows the belt (twin/controller/tracking.py)
+        yield from _go(rt, belt_target(rt, conveyor, loc.PosWrtRef.total()), profile, None)
+    elif loc.Type == ANGLES:
         yield from _go_joints(rt, from_gpl_angles(rt, loc.joint_values()), profile)
     else:
         yield from _go(rt, flange_target(rt, loc.total()), profile, righty_of(loc.Config))
@@ -185,6 +189,11 @@ class Move:
     def Approach(rt, loc, profile):
         """Move to the clearance position of a Cartesian `loc` (ZClearance, ZWorld)."""
         loc = location_arg(loc)
+        conveyor = loc.on_conveyor()
+        if conveyor is not None:  # the clearance point rides on the belt too
+            frame_total = loc.RefFrame.total()
+            yield from _go(rt, belt_target(rt, conveyor, frame_total.inverse() * loc.clearance()), profile, None)
+            return
         yield from _go(rt, flange_target(rt, loc.clearance()), profile, righty_of(loc.Config))
 
     @shared

@@ -40,6 +40,8 @@ class InstructionSpec:
     # their position.  I/O (READ (lun, handle)): a variable second unit argument gets the
     # last value the instruction returns (None: unchanged).
     writes_back: bool = False
+    # WINDOW %b = a, b, program: the values after "=" at these positions are names.
+    name_values: tuple[int, ...] = ()
 
 
 # Argument kinds.  A keyword's parameter is a real unless its annotation says otherwise;
@@ -122,10 +124,11 @@ def arity(fn: Callable) -> tuple[int, float]:
 
 
 def instruction(name: str, waits: bool = False, names: bool = False, targets: bool = False,
-                returns_unit: bool = False, array_values: tuple[int, ...] = (), writes_back: bool = False):
+                returns_unit: bool = False, array_values: tuple[int, ...] = (), writes_back: bool = False,
+                name_values: tuple[int, ...] = ()):
     def register(function):
         INSTRUCTIONS[name] = InstructionSpec(function, waits, names, targets, returns_unit,
-                                             array_values, writes_back)
+                                             array_values, writes_back, name_values)
         return function
 
     return register
@@ -144,4 +147,4 @@ def function(name: str, writes_first: bool = False, names: bool = False):
 
 
 # The domain modules register themselves on import (after the registry exists).
-from . import files, locations, motion, numbers, program, solve, strings, system  # noqa: E402,F401
+from . import belts, files, locations, motion, numbers, program, solve, strings, system  # noqa: E402,F401

@@ -221,8 +221,7 @@ def _pendant(rt, select):
 
 # Hardware the twin's cell does not have: graphics windows (FOPEN, G*,
 # GETEVENT) act on units ATTACH could never open, so they report
-# *Not attached to logical unit* through IOSTAT; external encoders (SETDEVICE)
-# are absent.
+# *Not attached to logical unit* through IOSTAT.
 for _name in ("GARC", "GCHAIN", "GCLEAR", "GCLIP", "GCOLOR", "GCOPY", "GFLOOD", "GICON", "GLINE",
               "GLINES", "GLOGICAL", "GPANEL", "GPOINT", "GRECTANGLE", "GSCAN", "GSLIDE", "GTEXTURE", "GTRANS",
               "GTYPE"):
@@ -253,11 +252,6 @@ def _no_camera(rt, *args: Any):
 for _name in ("VDISPLAY", "VPICTURE", "VLOCATE"):
     instruction(_name)(_no_camera)
 function("VFEATURE")(_no_camera)
-
-
-@instruction("SETDEVICE")
-def _setdevice(rt, unit: tuple, items: tuple):
-    raise fail(msg.DEVICE_NOT_READY, "no external encoder is installed")
 
 
 @instruction("KEYMODE")

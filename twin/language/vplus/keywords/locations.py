@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from ....controller.belt import BeltFrame, BeltLocation
 from ....controller.location import NULL, Location, trans
 from .. import messages as msg
 from ..values import FALSE, TRUE, components, fail
@@ -15,6 +16,9 @@ DEG = math.pi / 180.0
 
 
 def location_arg(value) -> Location:
+    """A transformation argument; a belt location (%belt:loc) is where its belt is now."""
+    if isinstance(value, BeltLocation):
+        return value.instantaneous()
     if not isinstance(value, Location):
         raise fail(msg.WRONG_TYPE, "location expected")
     return value
@@ -31,7 +35,10 @@ def _null(rt):
 
 
 @function("INVERSE")
-def _inverse(rt, loc: Loc):
+def _inverse(rt, loc: Any):
+    # HERE %belt:loc is SET loc = INVERSE(%belt):HERE: the belt frame where it is now.
+    if isinstance(loc, BeltFrame):
+        return loc.instantaneous().inverse()
     return location_arg(loc).inverse()
 
 

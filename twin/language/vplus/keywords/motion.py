@@ -9,6 +9,7 @@ Modifiers that take ALWAYS here are written with it as a keyword name (`CPOFF AL
 
 from __future__ import annotations
 
+from ....controller.belt import BeltLocation
 from ....controller.location import Location, approach
 from .. import messages as msg
 from ..values import fail, to_int
@@ -22,7 +23,7 @@ def _cp(rt) -> bool:
 
 def _destination(value):
     """A motion's target: a Location, or a precision point's joint values."""
-    if isinstance(value, tuple):
+    if isinstance(value, (tuple, BeltLocation)):
         return value
     return location_arg(value)
 
@@ -31,6 +32,8 @@ def _as_location(rt, value) -> Location:
     """A transformation for APPRO and straight-line motions (a precision point converted)."""
     if isinstance(value, tuple):
         return rt.robot.location_of_joints(value)
+    if isinstance(value, BeltLocation):  # the controller follows the belt
+        return value
     return location_arg(value)
 
 

@@ -1,0 +1,134 @@
+"""The robot: its MJCF is the cell's base spec; servo references in, joint state out; collisions.
+
+The robot file's names, its joints in chain order and their <joint>_pos/_vel actuators are
+kept; its root body is moved to the scene's base pose. Any serial robot with one position
+and one velocity actuator per joint fits (the Cobra SCARA, the Cartesian gantry).
+
+Collisions (docs/motion.md): every check the contacts of the robot's and the gripper's geoms
+are examined. A robot geom touching the fixed cell, or touching a part other than as the
+gripper allows (its jaws closing on it, holding it or just letting go; a suction cup on
+it), is a collision: recorded as an event (kind "collision") and handed to the run loop,
+which stops the robot and the program (`take_collisions`).
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from ...controller.kinematics import RobotKinematics
+from ..geometry import matrix_to_quat, vplus_to_matrix
+from ..scene import resolve
+from .base import CellContext, Component
+
+
+class Robot(Component):
+    section = "robot"
+
+    def __init__(self, config, ctx: CellContext):
+        super().__init__(config, ctx)
+        self.model_path = resolve(config.model, ctx.scene_path, "robot.model")
+        self.base_T = vplus_to_matrix(config.base)
+
+    def make_spec(self) -> mujoco.MjSpec:
+        """The cell's spec starts as the robot's own file."""
+        spec = mujoco.MjSpec.from_file(str(self.model_path))
+        spec.modelname = "twin_cell"
+        # The robot's joints, in chain order (the robot file holds nothing else).
+        self.joint_names: list[str] = [j.name for j in spec.joints]
+        return spec
+
+    def build(self, spec: mujoco.MjSpec, ctx: CellContext) -> None:
+        # Base pose on the table; the robot never sleeps (its servos move it).
+        root = spec.worldbody.first_body()
+        self.root_name = root.name
+        root.pos = self.base_T[:3, 3]
+        root.quat = matrix_to_quat(self.base_T[:3, :3])
+        root.first_body().sleep = mujoco.mjtSleepPolicy.mjSLEEP_NEVER  # the moving tree's root
+        self.gravity_compensate(spec)
+
+    @staticmethod
+    def gravity_compensate(spec: mujoco.MjSpec) -> None:
+        """The drives hold the arm's weight: gravity compensation on the robot (and gripper)
+        bodies stands in for the servo's integral action / gravity feed-forward (the robot
+        file's pure P+V servos otherwise sag J3 by ~0.12 mm, beyond the controller's FINE band)."""
+        for body in spec.bodies:
+            if body.name != "world":
+                body.gravcomp = 1.0
+
+    def bind(self, model: mujoco.MjModel, data: mujoco.MjData, ctx: CellContext) -> None:
+        m = self.model = model
+        self.data = data
+        jids = [m.joint(n).id for n in self.joint_names]
+        self.qadr = np.array([m.jnt_qposadr[j] for j in jids])
+        self.dadr = np.array([m.jnt_dofadr[j] for j in jids])
+        self._qdd_full = np.zeros(m.nv)  # scratch vectors for the acceleration feed-forward
+        self._torque_full = np.zeros(m.nv)
+        self.act_pos = np.array([m.actuator(f"{n}_pos").id for n in self.joint_names])
+        self.act_vel = np.array([m.actuator(f"{n}_vel").id for n in self.joint_names])
+        root = m.body(self.root_name).id
+        robot_body = np.array([self._descends_from(b, root) and m.body_weldid[b] != 0 for b in range(m.nbody)])
+        self.robot_geom = robot_body[m.geom_bodyid]  # moving robot geoms, gripper included
+        self._touching: set[tuple[int, int]] = set()
+        self.collisions: list[dict] = []
+        self.kinematics = RobotKinematics.from_mjcf(self.model_path)
+
+    def home(self, location: list[float]) -> None:
+        """Put the robot at the IK of `location` (RIGHTY), held there by its servos."""
+        kin, d = self.kinematics, self.data
+        seed = np.where(np.isfinite(kin.lower + kin.upper), (kin.lower + kin.upper) / 2, 0.0)
+        q = kin.ik(vplus_to_matrix(location), seed, righty=True)
+        d.qpos[self.qadr] = q
+        d.ctrl[self.act_pos] = q
+        d.ctrl[self.act_vel] = 0.0
+
+    def _descends_from(self, body: int, root: int) -> bool:
+        parent = self.model.body_parentid
+        while body not in (0, root):
+            body = int(parent[body])
+        return body == root
+
+    # ------------------------------------------------------------------ servo interface
+    def qpos(self) -> np.ndarray:
+        return self.data.qpos[self.qadr].copy()
+
+    def qvel(self) -> np.ndarray:
+        return self.data.qvel[self.dadr].copy()
+
+    def set_servo(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray | None = None) -> None:
+        ctrl = self.data.ctrl
+        ctrl[self.act_pos] = q
+        ctrl[self.act_vel] = qd
+        applied = self.data.qfrc_applied
+        if qdd is None:
+            applied[self.dadr] = 0.0
+            return
+        self._qdd_full[self.dadr] = qdd
+        mujoco.mj_mulM(self.model, self.data, self._torque_full, self._qdd_full)
+        applied[self.dadr] = self._torque_full[self.dadr]
+
+    # ------------------------------------------------------------------ collisions
+    def check(self, t: float) -> None:
+        """Record each new robot contact that is a collision (see the module docstring)."""
+        d = self.data
+        ncon = d.ncon
+        touching: set[tuple[int, int]] = set()
+        parts = self.ctx.parts
+        gripper = self.ctx.by_kind["gripper"]["gripper"]
+        if ncon:
+            g = d.contact.geom[:ncon]
+            robot = self.robot_geom[g]
+            mixed = np.flatnonzero((robot[:, 0] != robot[:, 1]) & (d.contact.dist[:ncon] < 0.0))
+            for k in mixed.tolist():
+                ours, other = (int(g[k, 0]), int(g[k, 1])) if robot[k, 0] else (int(g[k, 1]), int(g[k, 0]))
+                if not gripper.contact_allowed(ours, int(parts.geom_part[other]), t):
+                    touching.add((ours, other))
+        m = self.model
+        for ours, other in sorted(touching - self._touching):
+            part = int(parts.geom_part[other])
+            event = self.ctx.event("collision", **{
+                "robot_geom": m.geom(ours).name,
+                "with": f"part {parts.instance_of[part]}" if part >= 0 else m.geom(other).name,
+                "where": self.ctx.regions.region_of(d.geom_xpos[ours])})
+            self.collisions.append(event)
+        self._touching = touching

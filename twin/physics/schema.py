@@ -1,0 +1,392 @@
+"""The scene file's schema (pydantic v2): every section, key, type and bound a scene may use.
+
+`validate_scene(raw, path)` turns the parsed TOML into a `Scene` or raises `SceneError`
+(a user error: `twin run` prints it and exits 2) naming the file, the key path and what
+was expected, e.g.::
+
+    scenes/x.toml: conveyor[0].speed: expected a number, got 'fast'
+    scenes/x.toml: unknown section [convayor] (known: bin, conveyor, ...; did you mean conveyor?)
+
+Rules (docs/scene.md): no unknown section or key at any level; numbers must be finite
+(no nan/inf); lengths that size something must be positive; direction vectors non-zero;
+names unique per kind; cross references (the robot's home location, a source's or a
+sensor's conveyor, a part type, an encoder a photo-eye latches) must exist.
+Units in the file: mm, degrees, kg, mm/s, s; world poses for cell objects, robot-base
+frame for taught locations.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+from pathlib import Path
+from typing import Annotated, Any, Literal, Union, get_args, get_origin
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from ..errors import SceneError
+
+Finite = Annotated[float, Field(allow_inf_nan=False)]
+Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+NonNegative = Annotated[float, Field(ge=0, allow_inf_nan=False)]
+Vec2 = Annotated[list[Finite], Field(min_length=2, max_length=2)]
+Vec3 = Annotated[list[Finite], Field(min_length=3, max_length=3)]
+Size2 = Annotated[list[Positive], Field(min_length=2, max_length=2)]
+Size3 = Annotated[list[Positive], Field(min_length=3, max_length=3)]
+Pose6 = Annotated[list[Finite], Field(min_length=6, max_length=6)]
+Rgba = Annotated[list[Annotated[float, Field(ge=0, le=1)]], Field(min_length=4, max_length=4)]
+Output = Annotated[int, Field(ge=1, le=512)]  # V+ digital outputs
+Input = Annotated[int, Field(ge=1001, le=1512)]  # V+ digital inputs
+
+
+class Section(BaseModel):
+    """Base of every table: unknown keys are errors, ints are accepted for floats only."""
+    model_config = ConfigDict(extra="forbid", strict=True)
+
+
+def _nonzero(v: list[float]) -> list[float]:
+    if math.hypot(*v) < 1e-9:
+        raise ValueError("direction must not be the zero vector")
+    return v
+
+
+class Physics(Section):
+    timestep: Positive = 0.002
+    integrator: Literal["implicitfast", "implicit", "euler", "rk4"] = "implicitfast"
+    sleep: bool = True
+    check_interval: Positive = 0.01
+    seed: int = 0
+
+
+class Controller(Section):
+    monitor_speed: Annotated[float, Field(gt=0, le=100)] | None = None
+    cartesian_speed_mm_s: Positive | None = None
+    settle_after_program_s: NonNegative | None = None
+    no_progress_s: NonNegative | None = None  # the watchdog's no-progress limit, 0: none (docs/robustness.md)
+
+
+class Robot(Section):
+    model: str
+    base: Pose6 = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+    home: str = "start"
+
+
+class Gripper(Section):
+    type: Literal["fingers", "suction"] = "fingers"
+    model: str
+    site: str = "flange"
+    prefix: str = "gripper/"
+    gpl_signal: Output | None = None
+    # suction only
+    vacuum_kpa: Positive = 60.0          # vacuum level (below atmosphere) when on
+    vacuum_output: Output | None = None  # output that turns the vacuum on (besides CLOSEI)
+    blowoff_output: Output | None = None  # output that blows the part off
+    vacuum_input: Input | None = None    # input on while the cup holds a part (vacuum sensed)
+
+    @model_validator(mode="after")
+    def _suction_keys(self) -> "Gripper":
+        if self.type == "fingers":
+            used = [k for k in ("vacuum_output", "blowoff_output", "vacuum_input")
+                    if getattr(self, k) is not None]
+            if used:
+                raise ValueError(f"{', '.join(used)}: only for type = \"suction\"")
+        return self
+
+
+class Table(Section):
+    center: Vec3
+    size: Size3
+
+
+class Part(Section):
+    name: str
+    shape: Literal["box", "cylinder", "mesh"] = "box"
+    size: Size3 | None = None          # box: full x, y, z mm
+    radius: Positive | None = None     # cylinder
+    height: Positive | None = None     # cylinder
+    mesh: str | None = None            # mesh: a file trimesh reads (STL, OBJ, ...), in mm
+    mass: Positive
+    friction: Positive = 0.5
+    rgba: Rgba = [0.9, 0.55, 0.1, 1.0]
+
+    @model_validator(mode="after")
+    def _shape_keys(self) -> "Part":
+        need = {"box": ("size",), "cylinder": ("radius", "height"), "mesh": ("mesh",)}[self.shape]
+        missing = [k for k in need if getattr(self, k) is None]
+        if missing:
+            raise ValueError(f"shape {self.shape!r} needs {', '.join(missing)}")
+        extra = [k for k in ("size", "radius", "height", "mesh") if k not in need and getattr(self, k) is not None]
+        if extra:
+            raise ValueError(f"{', '.join(extra)}: not used by shape {self.shape!r}")
+        return self
+
+
+class Feeder(Section):
+    name: str = "nest"
+    part: str | None = None            # part type (default: the first [[part]])
+    nest: Vec3
+    nest_size: Size2 = [44.0, 44.0]
+    nest_yaw: Finite = 0.0
+    pool: Annotated[int, Field(ge=1, le=10000)]
+    delay: NonNegative = 0.3
+    jitter_xy: NonNegative = 0.0
+    jitter_yaw: NonNegative = 0.0
+
+
+class Encoder(Section):
+    number: Annotated[int, Field(ge=1, le=16)]
+    counts_per_mm: Positive = 10.0
+
+
+class Conveyor(Section):
+    name: str
+    top_center: Vec3
+    size: Size3                         # width, length, thickness mm
+    direction: Annotated[list[Finite], Field(min_length=2, max_length=3)] = [1.0, 0.0]
+    speed: NonNegative                  # mm/s
+    accel: Positive = 1000.0            # mm/s^2 ramp
+    running: bool = True                # at start (without run_output)
+    run_output: Output | None = None
+    reverse_output: Output | None = None
+    rail_height: NonNegative = 8.0
+    friction: Positive = 0.8
+    place: bool = False                 # releasing a part on it is a put-down
+    encoder: Encoder | None = None
+
+    _direction = field_validator("direction")(lambda v: _nonzero(v))
+
+
+class Source(Section):
+    name: str
+    conveyor: str
+    parts: Annotated[list[str], Field(min_length=1)] | None = None  # default: every [[part]]
+    weights: Annotated[list[Positive], Field(min_length=1)] | None = None
+    mean_interval: Positive = 2.0       # s between parts on average
+    distribution: Literal["fixed", "uniform", "exponential"] = "exponential"
+    min_gap: NonNegative = 60.0         # mm of belt between consecutive parts at least
+    position: NonNegative = 30.0        # mm from the belt's upstream end to the part centre
+    lateral: Finite = 0.0               # mm across the belt (+ = left of travel)
+    jitter_lateral: NonNegative = 0.0   # mm, uniform +/-
+    jitter_yaw: NonNegative = 0.0       # deg, uniform +/-
+    yaw: Finite = 0.0                   # deg, relative to the belt
+    pool: Annotated[int, Field(ge=1, le=10000)] = 40
+    start: NonNegative = 0.0            # s: first part
+
+    @model_validator(mode="after")
+    def _weights(self) -> "Source":
+        if self.weights is not None and (self.parts is None or len(self.weights) != len(self.parts)):
+            raise ValueError("weights needs one value per entry of parts")
+        return self
+
+
+class Sensor(Section):
+    name: str
+    type: Literal["photo_eye", "presence"]
+    input: Input
+    # photo_eye
+    conveyor: str | None = None
+    position: Finite | None = None      # mm along the belt from its upstream end
+    height: Positive = 5.0              # mm above the belt top
+    latch_encoder: int | None = None
+    # presence
+    lo: Vec3 | None = None
+    hi: Vec3 | None = None
+
+    @model_validator(mode="after")
+    def _type_keys(self) -> "Sensor":
+        if self.type == "photo_eye":
+            missing = [k for k in ("conveyor", "position") if getattr(self, k) is None]
+            extra = [k for k in ("lo", "hi") if getattr(self, k) is not None]
+        else:
+            missing = [k for k in ("lo", "hi") if getattr(self, k) is None]
+            extra = [k for k in ("conveyor", "position", "latch_encoder") if getattr(self, k) is not None]
+        if missing:
+            raise ValueError(f"a {self.type} needs {', '.join(missing)}")
+        if extra:
+            raise ValueError(f"{', '.join(extra)}: not used by a {self.type}")
+        if self.lo is not None and not all(a < b for a, b in zip(self.lo, self.hi)):
+            raise ValueError("lo must be below hi on every axis")
+        return self
+
+
+class Spreader(Section):
+    center: Vec2 | None = None
+    radius: Positive
+    height: Positive
+
+
+class Bin(Section):
+    name: str = "bin"
+    floor_center: Vec3
+    inner_size: Size3
+    wall: Positive = 8.0
+    stand: bool = False
+    spreader: Spreader | None = None
+    place: bool = True                  # a part let go over it is put down (False: a reject bin)
+
+
+class Tray(Section):
+    name: str
+    center: Vec3                        # centre of the tray floor's top face, world mm
+    yaw: Finite = 0.0
+    rows: Annotated[int, Field(ge=1, le=100)]   # along the tray's y
+    cols: Annotated[int, Field(ge=1, le=100)]   # along the tray's x
+    pitch: Size2                        # x, y mm between cell centres
+    wall: Positive = 4.0
+    wall_height: NonNegative = 6.0
+    margin: NonNegative = 10.0          # mm of floor around the outer cells
+    swap_when_full: bool = False        # an operator takes a full tray away (an empty one in its place)
+
+
+class Region(Section):
+    lo: Vec3
+    hi: Vec3
+    place: bool = False
+
+    @model_validator(mode="after")
+    def _ordered(self) -> "Region":
+        if not all(a < b for a, b in zip(self.lo, self.hi)):
+            raise ValueError("lo must be below hi on every axis")
+        return self
+
+
+class Scene(Section):
+    physics: Physics = Physics()
+    controller: Controller = Controller()
+    robot: Robot
+    gripper: Gripper
+    table: Table | None = None
+    part: Annotated[list[Part], Field(min_length=1)]
+    feeder: list[Feeder] = []
+    conveyor: list[Conveyor] = []
+    source: list[Source] = []
+    sensor: list[Sensor] = []
+    bin: list[Bin] = []
+    tray: list[Tray] = []
+    regions: dict[str, Region] = {}
+    locations: dict[str, Pose6] = {}
+
+    @model_validator(mode="after")
+    def _references(self) -> "Scene":
+        if self.robot.home not in self.locations:
+            raise ValueError(f"robot.home: location {self.robot.home!r} is not in [locations]"
+                             f" (has: {', '.join(self.locations) or 'none'})")
+        kinds = {"part": self.part, "feeder": self.feeder, "conveyor": self.conveyor,
+                 "source": self.source, "sensor": self.sensor, "bin": self.bin, "tray": self.tray}
+        for kind, items in kinds.items():
+            names = [c.name for c in items]
+            for i, name in enumerate(names):
+                if name in names[:i]:
+                    raise ValueError(f"{kind}[{i}].name: {name!r} is used twice")
+        parts = [p.name for p in self.part]
+        conveyors = {c.name: c for c in self.conveyor}
+        encoders = [c.encoder.number for c in self.conveyor if c.encoder is not None]
+        if len(set(encoders)) != len(encoders):
+            raise ValueError("conveyor[*].encoder.number: each encoder needs its own number")
+        for i, f in enumerate(self.feeder):
+            _known(f"feeder[{i}].part", f.part, parts, "[[part]]")
+        for i, s in enumerate(self.source):
+            _known(f"source[{i}].conveyor", s.conveyor, list(conveyors), "[[conveyor]]")
+            for j, p in enumerate(s.parts or []):
+                _known(f"source[{i}].parts[{j}]", p, parts, "[[part]]")
+            if s.position > conveyors[s.conveyor].size[1]:
+                raise ValueError(f"source[{i}].position: {s.position:g} mm is beyond the belt's "
+                                 f"length ({conveyors[s.conveyor].size[1]:g} mm)")
+        for i, s in enumerate(self.sensor):
+            if s.type == "photo_eye":
+                _known(f"sensor[{i}].conveyor", s.conveyor, list(conveyors), "[[conveyor]]")
+                length = conveyors[s.conveyor].size[1]
+                if not 0.0 <= s.position <= length:
+                    raise ValueError(f"sensor[{i}].position: {s.position:g} mm is off the belt "
+                                     f"(0 to {length:g} mm)")
+                if s.latch_encoder is not None and s.latch_encoder not in encoders:
+                    raise ValueError(f"sensor[{i}].latch_encoder: no conveyor has encoder "
+                                     f"{s.latch_encoder} (encoders: {encoders or 'none'})")
+        inputs = [s.input for s in self.sensor] + (
+            [self.gripper.vacuum_input] if self.gripper.vacuum_input is not None else [])
+        for i, s in enumerate(self.sensor):
+            if inputs.count(s.input) > 1:
+                raise ValueError(f"sensor[{i}].input: input {s.input} is wired twice")
+        return self
+
+
+def _known(where: str, name: str | None, names: list[str], table: str) -> None:
+    if name is not None and name not in names:
+        raise ValueError(f"{where}: {name!r} is not a {table} (has: {', '.join(names) or 'none'})")
+
+
+# ------------------------------------------------------------------ error messages
+def validate_scene(raw: dict, path: str | Path) -> Scene:
+    """The scene as typed models, or SceneError with one located, readable message."""
+    try:
+        return Scene.model_validate(raw)
+    except ValidationError as err:
+        errors = err.errors(include_url=False)
+        # A misspelt key is also a missing one: name the misspelling, it says more.
+        first = min(errors, key=lambda e: e["type"] != "extra_forbidden")
+        raise SceneError(_message(first), file=str(path)) from None
+
+
+def _message(error: dict) -> str:
+    loc = tuple(error["loc"])
+    kind = error["type"]
+    if kind == "extra_forbidden":
+        parent, key = _model_at(loc[:-1]), str(loc[-1])
+        allowed = sorted(parent.model_fields) if parent is not None else []
+        close = difflib.get_close_matches(key, allowed, n=1)
+        hint = f"; did you mean {close[0]}?" if close else ""
+        what = f"section [{key}]" if len(loc) == 1 else f"key {key!r} in {_path(loc[:-1])}"
+        return f"unknown {what} (known: {', '.join(allowed)}{hint})"
+    where = _path(loc)
+    msg = error["msg"]
+    if kind == "value_error":
+        msg = msg.removeprefix("Value error, ")
+        return f"{where}: {msg}" if where else msg
+    if kind == "missing":
+        return f"{where}: missing (required)"
+    expected = {"float_type": "a number", "int_type": "an integer", "string_type": "a string",
+                "bool_type": "true or false", "list_type": "a list", "model_type": "a table",
+                "dict_type": "a table", "finite_number": "a finite number (not nan or inf)",
+                "literal_error": msg.removeprefix("Input should be ").replace("'", '"')}.get(kind)
+    got = error.get("input")
+    shown = f", got {got!r}" if not isinstance(got, dict) else ""
+    if expected is not None:
+        return f"{where}: expected {expected}{shown}"
+    return f"{where}: {msg[0].lower() + msg[1:]}{shown}"
+
+
+def _path(loc: tuple) -> str:
+    out = ""
+    for part in loc:
+        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
+    return out
+
+
+def _model_at(loc: tuple) -> type[BaseModel] | None:
+    """The section model at a key path (list indices and table keys stepped through), for
+    the list of known keys."""
+    model: Any = Scene
+    for part in loc:
+        model = _unwrap(model)
+        if get_origin(model) is dict:  # `part` is a key of a free table: its value's type
+            model = get_args(model)[1]
+        elif get_origin(model) is list:  # `part` is an index
+            model = get_args(model)[0]
+        elif isinstance(model, type) and issubclass(model, BaseModel) and part in model.model_fields:
+            model = model.model_fields[part].annotation
+        else:
+            return None
+    model = _unwrap(model)
+    return model if isinstance(model, type) and issubclass(model, BaseModel) else None
+
+
+def _unwrap(annotation: Any) -> Any:
+    """X | None and Annotated[X, ...] -> X (lists and dicts are kept)."""
+    while True:
+        origin = get_origin(annotation)
+        if origin is Annotated:
+            annotation = get_args(annotation)[0]
+        elif origin is Union or (origin is not None and "UnionType" in type(annotation).__name__):
+            annotation = [a for a in get_args(annotation) if a is not type(None)][0]
+        else:
+            return annotation
