@@ -126,10 +126,10 @@ def test_gpl_main_unknown_exits_2(tmp_path, capsys):
 
 BROKEN_SCENES = [
     ("not-toml", "[robot\nx = 1\n", "Expected ']'"),
-    ("missing-sections", '[robot]\nmodel = "x"\n', "scene lacks"),
+    ("missing-sections", '[robot]\nmodel = "x"\n', "missing (required)"),
     ("binary", "\x00\x01\x02", ""),
     ("not-utf8", "[robot]\nmodel = \"\xff\"\n", "utf-8"),
-    ("empty", "", "scene lacks"),
+    ("empty", "", "robot: missing (required)"),
 ]
 
 
@@ -141,6 +141,46 @@ def test_broken_scene_exits_2(files, capsys, text, expected):
     assert result.status == 2, result.err
     assert str(scene) in result.err and expected in result.err
     assert "Traceback" not in result.err
+
+
+# (id, text of the demo scene to replace, its replacement, what the message says)
+WRONG_SCENE_VALUES = [
+    ("speed-nan", "speed = 200.0 ", "speed = nan ", "conveyor[0].speed: expected a finite number"),
+    ("speed-inf", "speed = 200.0 ", "speed = inf ", "conveyor[0].speed: expected a finite number"),
+    ("zero-direction", "direction = [0.0, 1.0]", "direction = [0.0, 0.0]", "must not be the zero vector"),
+    ("misspelt-section", "[conveyor]", "[convayor]", "did you mean conveyor?"),
+    ("negative-pool", "pool = 120 ", "pool = -3 ", "feeder[0].pool"),
+    ("zero-timestep", "timestep = 0.002 ", "timestep = 0 ", "physics.timestep"),
+    ("mass-word", "mass = 0.05 ", 'mass = "heavy" ', "part[0].mass: expected a number"),
+    ("missing-model", 'model = "models/robots/cobra_s600.xml"', 'model = "models/robots/nope.xml"', "not found"),
+    ("broken-model", 'model = "models/robots/cobra_s600.xml"', 'model = "{broken}"', "XML parse error"),
+    ("model-is-a-device", 'model = "models/robots/cobra_s600.xml"', 'model = "/dev/null"', "/dev/null"),
+    ("unknown-home", 'home = "start" ', 'home = "nowhere" ', "robot.home: location 'nowhere'"),
+    ("short-size", "size = [30.0, 30.0, 20.0]", "size = [30.0, 30.0]", "part[0].size"),
+    ("long-location", "start = [", "start = [9000.0, ", "locations.start"),
+]
+
+
+@pytest.mark.parametrize("old, new, expected", [c[1:] for c in WRONG_SCENE_VALUES],
+                         ids=[c[0] for c in WRONG_SCENE_VALUES])
+def test_scene_with_a_wrong_value_exits_2_naming_the_key(files, capsys, old, new, expected):
+    broken = files["tmp"] / "broken.xml"
+    broken.write_text("<mujoco><bad")
+    text = SCARA_SCENE.read_text()
+    assert old in text
+    scene = files["tmp"] / "wrong.toml"
+    scene.write_text(text.replace(old, new.format(broken=broken), 1))
+    result = run_cli(capsys, "run", files["program"], "--scene", scene)
+    assert result.status == 2, result.err
+    assert str(scene) in result.err and expected in result.err, result.err
+    assert "Traceback" not in result.err
+
+
+def test_scene_no_progress_limit_must_not_be_negative(files, capsys):
+    scene = files["tmp"] / "limit.toml"
+    scene.write_text(SCARA_SCENE.read_text() + "\n[controller]\nno_progress_s = -1\n")
+    result = run_cli(capsys, "run", files["program"], "--scene", scene)
+    assert result.status == 2 and "controller.no_progress_s" in result.err
 
 
 def test_scene_with_a_wrong_value_type_exits_2(files, capsys):
