@@ -328,3 +328,41 @@ def test_moving_robot_is_progress(tmp_path, capsys):
 .END"""
     result = run_cli(capsys, "run", vplus_file(tmp_path, source), "--no-progress-limit", "1")
     assert result.status == 0, result.err
+
+
+# ------------------------------------------------------------------ a cell that never rests
+def _conveyor_scene():
+    from conftest import SCARA_SCENE
+
+    return SCARA_SCENE.parent / "scara_conveyor.toml"
+
+
+def test_program_polling_the_belt_sensor_is_not_stopped(tmp_path, capsys):
+    """Parts arrive every 2 s on average past the photo-eye on input 1001: a program counting
+    them with WAIT runs its course although it never moves the robot."""
+    source = """
+.PROGRAM count.parts()
+    FOR i = 1 TO 4
+        WAIT SIG(1001)
+        WAIT SIG(-1001)
+    END
+    TYPE "done"
+.END"""
+    result = run_cli(capsys, "run", vplus_file(tmp_path, source), "--scene", _conveyor_scene(),
+                     "--no-progress-limit", "6", "--max-sim-time", "60")
+    assert result.status == 0, result.err
+    assert "done" in result.out
+
+
+def test_busy_loop_in_a_cell_whose_belt_never_stops_is_stopped(tmp_path, capsys):
+    """Parts keep coming and the sensor keeps switching, but the program never looks: no
+    progress (and no deadlock: the cell is never at rest)."""
+    source = ".PROGRAM spin()\n    i = 0\n    WHILE TRUE DO\n        i = i+1\n    END\n.END"
+    result = run_cli(capsys, "run", vplus_file(tmp_path, source), "--scene", _conveyor_scene(), *SHORT)
+    assert result.status == 1 and f"({NO_PROGRESS})" in result.err, result.err
+
+
+def test_wait_on_an_input_no_sensor_drives_in_a_live_cell_is_no_progress(tmp_path, capsys):
+    source = ".PROGRAM w()\n    WAIT SIG(1010)\n.END"
+    result = run_cli(capsys, "run", vplus_file(tmp_path, source), "--scene", _conveyor_scene(), *SHORT)
+    assert result.status == 1 and f"({NO_PROGRESS})" in result.err and "WAIT SIG(1010)" in result.err

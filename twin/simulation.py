@@ -15,10 +15,11 @@ from pathlib import Path
 from typing import Callable
 
 from .controller.controller import COLLISION, MotionSettings, VirtualController
-from .controller.io import DigitalIO
+from .controller.io import INPUTS, DigitalIO
 from .controller.location import Location
 from .controller.scheduler import Scheduler
-from .controller.watchdog import DEFAULT_NO_PROGRESS_S, Watchdog, WatchdogLimits, is_external, task_is_blocked
+from .controller.watchdog import (DEADLOCK_CONFIRM_S, DEFAULT_NO_PROGRESS_S, Watchdog, WatchdogLimits,
+                                  is_external, task_is_blocked)
 from .errors import ProgramError
 from .physics.cell import Cell
 from .resources import bundled
@@ -60,6 +61,13 @@ class Simulation:
         self.no_progress_s: float | None = no_progress if no_progress > 0 else None
         self.clock_reads = 0  # how often the programs read the time (watchdog: a wait may end)
         self._events_watched = 0  # cell events the watchdog has seen
+        self._hand_watched = self.controller.hand_state
+        self._encoders_watched: tuple[int, ...] = ()
+        # A source brings parts for ever and a feeder one after its delay: the cell is never a
+        # fixed point with a source, and a feeder's delay is waited out before a deadlock.
+        self._cell_lives = any(c.section == "source" for c in self.cell.components)
+        self.deadlock_confirm_s = DEADLOCK_CONFIRM_S + max(
+            (float(c.config.delay) for c in self.cell.components if c.section == "feeder"), default=0.0)
 
     def clock(self) -> float:
         self.clock_reads += 1
@@ -74,7 +82,7 @@ class Simulation:
         called after every major cycle (`twin serve` paces and stops with it), says stop,
         or a limit or the watchdog stops it (docs/robustness.md, "Runaways")."""
         wall_start = time.perf_counter()
-        watchdog = Watchdog(WatchdogLimits(self.no_progress_s, max_wall_time))
+        watchdog = Watchdog(WatchdogLimits(self.no_progress_s, max_wall_time, self.deadlock_confirm_s))
         cell, controller, scheduler = self.cell, self.controller, self.scheduler
         steps = max(1, round(MAJOR_CYCLE_S / cell.timestep))
         errors: list[dict] = []
@@ -130,16 +138,31 @@ class Simulation:
 
     def _watch(self, watchdog: Watchdog, no_clock_read: bool, alive_before: list):
         """Tell the watchdog what this cycle changed (before `_record` drains the signal
-        changes); the error that ends the run, if it is a runaway."""
-        cell, live = self.cell, self._live_tasks()
-        self._events_watched, events_before = len(cell.events), self._events_watched
-        progressed = (bool(self.io.changes) or len(cell.events) != events_before or live != alive_before
-                      or float(abs(cell.data.qvel).max(initial=0.0)) > AT_REST_SPEED)
+        changes); the error that ends the run, if it is a runaway.  Progress is what the
+        programs do or look at: the robot or the hand moving, an output or soft signal
+        changing, an input a program has read changing, a task starting or ending (parts
+        the cell moves on its own are not: a belt may run for ever)."""
+        cell, io, controller, live = self.cell, self.io, self.controller, self._live_tasks()
+        hand, self._hand_watched = self._hand_watched, controller.hand_state
+        progressed = (live != alive_before or hand != controller.hand_state
+                      or any(n not in INPUTS or n in io.watched for n, _ in io.changes)
+                      or float(abs(cell.robot_qvel()).max(initial=0.0)) > AT_REST_SPEED)
         waits = [self.scheduler.waiting_on(task) for task in live]
         external_wait = any(is_external(wait) for wait in waits)
-        blocked = (no_clock_read and not self.controller.moving and not external_wait
-                   and all(task_is_blocked(wait, task.SLICE) for wait, task in zip(waits, live)))
+        blocked = (no_clock_read and not progressed and not io.changes and not controller.moving
+                   and not external_wait and all(task_is_blocked(w, t.SLICE) for w, t in zip(waits, live))
+                   and self._cell_at_rest())
         return watchdog.observe(cell.time, progressed, blocked, external_wait, live)
+
+    def _cell_at_rest(self) -> bool:
+        """Nothing in the cell moves or happens, and nothing will by itself: no new event, no
+        body moving, no encoder counting, no part source."""
+        cell = self.cell
+        events, self._events_watched = self._events_watched, len(cell.events)
+        encoders, self._encoders_watched = self._encoders_watched, tuple(
+            e.counts() for e in cell.encoders.values())
+        return (not self._cell_lives and events == len(cell.events) and encoders == self._encoders_watched
+                and float(abs(cell.data.qvel).max(initial=0.0)) <= AT_REST_SPEED)
 
     def _record(self) -> None:
         """Once per major cycle: a recording frame when one is due, and the digital signals

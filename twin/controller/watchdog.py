@@ -6,18 +6,21 @@ Three rules, checked once per major cycle (docs/robustness.md, "Runaways"):
   condition (a V+ WAIT, WAIT.EVENT without a timeout, a GPL Join, WaitEvent,
   a signal wait...), no task read the clock while it waited (a time-out or a
   TIMER() test will end the wait), the robot has no motion queued, and the
-  cell is at rest (no signal changed, no cell event, no body moving).  The
-  state is then a fixed point of the whole simulation: each later cycle is
-  the same as this one.  It is confirmed over DEADLOCK_CONFIRM_S of
-  simulated time so that a part just coming to rest is not mistaken for it.
-* **No progress**: for `no_progress_s` simulated seconds nothing visible
-  outside the controller changed: no body in the cell moved (robot, gripper,
-  parts), no digital signal changed, no cell event (part presented, grasped,
-  released, dropped...), no task started or ended.  A program spinning in a
-  loop, however much it computes, prints or writes to its own files, is
-  stopped; a program polling a sensor while parts travel on a belt is not
-  (the parts move).  A task waiting on the outside world (a GPL socket
-  accept or receive) holds the clock: a peer may connect at any time.
+  cell is at rest (no signal changed, no cell event, no body moving, no
+  encoder counting, no part source that will bring a part).  The state is
+  then a fixed point of the whole simulation: each later cycle is the same as
+  this one.  It is confirmed over `deadlock_confirm_s` of simulated time (1 s
+  plus the longest feeder delay) so that a part just coming to rest or about
+  to be presented is not mistaken for it.
+* **No progress**: for `no_progress_s` simulated seconds nothing the programs
+  do or look at changed: the robot's joints did not move, the hand was not
+  driven, no output or soft signal changed, no input that a program has read
+  changed, no task started or ended.  A program spinning in a loop, however
+  much it computes, prints or writes to its own files, is stopped, even in a
+  cell whose belts carry parts past it; a program polling a sensor is not
+  while the parts it waits for keep arriving (its input changes).  A task
+  waiting on the outside world (a socket accept or receive, a V+ network
+  read) holds the clock: a peer may connect at any time.
 * **Wall time**: `max_wall_s` seconds of real time (nondeterministic by nature,
   so off unless asked for).
 
@@ -53,6 +56,7 @@ def external(condition: Callable[[], bool]) -> Callable[[], bool]:
 class WatchdogLimits:
     no_progress_s: float | None = DEFAULT_NO_PROGRESS_S  # None: no such limit
     max_wall_s: float | None = None
+    deadlock_confirm_s: float = DEADLOCK_CONFIRM_S  # how long a fixed point must last
 
 
 class Watchdog:
@@ -75,16 +79,16 @@ class Watchdog:
         if blocked and not progressed:
             if self._blocked_since is None:
                 self._blocked_since = t
-            elif t - self._blocked_since >= DEADLOCK_CONFIRM_S - 1e-9:
+            elif t - self._blocked_since >= self.limits.deadlock_confirm_s - 1e-9:
                 return self._error(DEADLOCK, "*Deadlock* nothing can change any more: every task waits "
                                    "for something no task, signal or part will bring", tasks)
         else:
             self._blocked_since = None
         limit = self.limits.no_progress_s
         if limit is not None and t - self._last_progress_t >= limit - 1e-9:
-            return self._error(NO_PROGRESS, f"*No progress* for {limit:g} s of simulated time: no motion, "
-                               "no signal change, no part moved (limit: [controller] no_progress_s or "
-                               "--no-progress-limit)", tasks)
+            return self._error(NO_PROGRESS, f"*No progress* for {limit:g} s of simulated time: no robot or "
+                               "hand motion, no output changed, no input the program reads changed (limit: "
+                               "[controller] no_progress_s or --no-progress-limit)", tasks)
         wall = self.limits.max_wall_s
         if wall is not None and self._wall_clock() - self._wall_start >= wall:
             return self._error(WALL_TIME_LIMIT, f"*Wall time limit reached* ({wall:g} s)", tasks)
