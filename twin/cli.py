@@ -76,14 +76,19 @@ def _kind(mode: int) -> str:
     return "a regular file"
 
 
-def check_input_file(path: str, what: str) -> Path:
-    """An input that must be a readable regular file (a FIFO would hang, a folder is no file)."""
+def _mode(path: str, what: str, missing: str = "no such file") -> int:
+    """The file mode of an input that must exist (links followed)."""
     try:
-        mode = os.stat(path).st_mode
+        return os.stat(path).st_mode
     except FileNotFoundError:
-        raise InputError(f"{what} {path}: no such file") from None
+        raise InputError(f"{what} {path}: {missing}") from None
     except OSError as err:
         raise InputError(f"{what} {path}: {err.strerror}") from None
+
+
+def check_input_file(path: str, what: str) -> Path:
+    """An input that must be a readable regular file (a FIFO would hang, a folder is no file)."""
+    mode = _mode(path, what)
     if not stat.S_ISREG(mode):
         raise InputError(f"{what} {path}: is {_kind(mode)}, not a file")
     if not os.access(path, os.R_OK):
@@ -94,13 +99,7 @@ def check_input_file(path: str, what: str) -> Path:
 def check_program(path: str) -> list[Path]:
     """A V+ file, or a GPL project folder with a readable Project.gpr; the files the run
     reads (so that no output may replace them)."""
-    try:
-        mode = os.stat(path).st_mode
-    except FileNotFoundError:
-        raise InputError(f"program {path}: no such file or folder") from None
-    except OSError as err:
-        raise InputError(f"program {path}: {err.strerror}") from None
-    if stat.S_ISDIR(mode):
+    if stat.S_ISDIR(_mode(path, "program", missing="no such file or folder")):
         project = Path(path) / "Project.gpr"
         if not project.exists():
             raise InputError(f"program {path}: a folder without Project.gpr is not a GPL project")
