@@ -19,6 +19,7 @@ import time
 import numpy as np
 import pytest
 
+from twin.controller import network
 from twin.runner import finish_run, start_program
 
 MOTION_PORT, STATE_PORT = 11000, 11002
@@ -35,7 +36,14 @@ TARGETS = [  # rad, rad, m, rad (the Cobra's J3 is the quill, in metres for ROS)
 
 
 def connect(port: int) -> socket.socket:
+    """A client of the server's `port` (in-process runs: wherever the port was moved)."""
     for _ in range(1000):
+        if port in network.port_map:
+            real = network.listening_on(port)
+            if real is None:
+                time.sleep(0.01)
+                continue
+            port = real
         try:
             return socket.create_connection(("127.0.0.1", port), timeout=30)
         except OSError:
@@ -100,6 +108,15 @@ class Run:
     """The server on the SCARA cell; `client(run)` in a thread; measured joints on request."""
 
     def __init__(self, client):
+        # Free ports, so that test runs side by side never fight over 11000 and 11002.
+        network.port_map.update({MOTION_PORT: 0, STATE_PORT: 0})
+        try:
+            self._run(client)
+        finally:
+            for port in (MOTION_PORT, STATE_PORT):
+                network.port_map.pop(port, None)
+
+    def _run(self, client):
         self.requests: queue.Queue = queue.Queue()
         self.done = threading.Event()
         self.failure: BaseException | None = None

@@ -12,7 +12,7 @@ import struct
 import pytest
 
 from twin.language.vplus import messages as msg
-from twin.controller.network import listening_ports
+from twin.controller.network import listening
 from twin.language.vplus.tcp import loopback
 
 from vplus_helpers import run_vplus
@@ -96,7 +96,7 @@ def test_server_reports_connections_data_and_closes_then_serves_the_next_client(
                      "100", "1", "0", "1", "1", "4", "101", "1", "0"]
     assert struct.unpack(">i", bytes(first.received)) == (42,)
     assert struct.unpack(">i", bytes(second.received)) == (-6,)
-    assert port not in listening_ports  # FCLOSE stopped listening
+    assert port not in listening  # FCLOSE stopped listening
 
 
 def test_bytes_sent_in_one_cycle_are_seen_at_the_next_cycle():

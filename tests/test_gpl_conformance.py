@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from twin.errors import ProgramError
 from twin.runner import run_program
 
 from conftest import SCARA_SCENE as SCENE
@@ -115,3 +116,481 @@ def test_boot_state_and_power_enabled_with_a_timeout(tmp_path):
     lines = report.output.splitlines()
     assert lines[:2] == ["False False", "True True"]
     assert lines[2] in ("1", "2")
+
+
+# ------------------------------------------------------------ declarations and arrays
+def test_redim_and_redim_preserve():
+    """ReDim gives new bounds (manual L766-817); ReDim Preserve (GPL Dictionary, ReDim
+    statement) keeps the elements inside both the old and the new bounds."""
+    out = output_of("""
+Module M
+    Public Sub Main()
+        Dim a(2) As Integer
+        Dim g(1, 1) As String
+        a(0) = 5
+        a(2) = 7
+        ReDim Preserve a(4)
+        Console.WriteLine(a(0) & " " & a(2) & " " & a(4) & " " & a.GetUpperBound(0))
+        ReDim Preserve a(1)
+        Console.WriteLine(a(0) & " " & a.Length)
+        ReDim a(3)
+        Console.WriteLine(a(0) & " " & a.Length)
+        g(1, 1) = "x"
+        ReDim Preserve g(2, 3)
+        Console.WriteLine(g(1, 1) & g(2, 3) & "|")
+    End Sub
+End Module
+""")
+    assert out == "5 7 0 4\n5 2\n0 4\nx|\n"
+
+
+def test_dim_inside_blocks_as_precise_code_writes_it():
+    """A Dim inside If, For, Select, While and Try bodies (Precise's sample code does
+    this; VB.NET block scope): each works, and its initialiser runs each time."""
+    out = output_of("""
+Module M
+    Public Sub Main()
+        Dim i As Integer
+        For i = 1 To 3
+            Dim sq As Integer = i * i
+            If sq > 1 Then
+                Dim msg As String = "sq=" & sq
+                Console.WriteLine(msg)
+            End If
+        Next
+        Select Case i
+            Case 4
+                Dim four As New Location
+                four.X = 4
+                Console.WriteLine(CStr(four.X))
+        End Select
+        Try
+            Dim z As Double = 1.5
+            Console.WriteLine(CStr(z))
+        Catch
+        End Try
+        If True Then
+            Dim msg As String
+            Console.WriteLine("again " & msg)
+        End If
+    End Sub
+End Module
+""")
+    assert out == "sq=4\nsq=9\n4\n1.5\nagain sq=9\n"
+
+
+def test_class_const_inside_its_class_its_shared_bounds_and_outside():
+    """A class `Public Const` (manual L756-762: constants) is a name inside its class,
+    including in its own Shared array bounds, and Class.Const outside."""
+    out = output_of("""
+Class Buf
+    Public Const SIZE As Integer = 4
+    Public Shared cells(SIZE) As Integer
+    Public Function Cap() As Integer
+        Return SIZE * 2
+    End Function
+End Class
+Module M
+    Public Sub Main()
+        Dim b As New Buf
+        Console.WriteLine(Buf.SIZE & " " & b.Cap() & " " & Buf.cells.GetUpperBound(0))
+    End Sub
+End Module
+""")
+    assert out == "4 8 4\n"
+
+
+def test_module_const_from_another_modules_member_whatever_the_file_order(tmp_path):
+    """ch. 10 "Special Initialization": module variables are initialised module by module
+    in load order; a Const that uses a Const of a module loaded later still gets its value
+    (constants are set first, in the order they need each other)."""
+    folder = tmp_path / "p"
+    folder.mkdir()
+    (folder / "Project.gpr").write_text('ProjectBegin\nProjectName="p"\nProjectStart="Main"\n'
+                                       'ProjectSource="A.gpl"\nProjectSource="B.gpl"\nProjectEnd\n')
+    (folder / "A.gpl").write_text("Module A\n    Public Const Two As Integer = B.One * 2\n"
+                                  "    Public Const Label As String = \"n=\" & B.One\n"
+                                  "    Public Sub Main()\n        Console.WriteLine(Label & \" \" & CStr(Two))\n"
+                                  "    End Sub\nEnd Module\n")
+    (folder / "B.gpl").write_text("Module B\n    Public Const One As Integer = 1\nEnd Module\n")
+    from gpl_helpers import run_project
+    system, thread = run_project(folder)
+    assert thread.error is None
+    assert system.console.output == "n=1 2\n"
+
+
+def test_constants_that_need_each_other_are_a_located_error():
+    with pytest.raises(ProgramError) as caught:
+        output_of("""
+Module A
+    Public Const X As Integer = B.Y
+    Public Sub Main()
+    End Sub
+End Module
+Module B
+    Public Const Y As Integer = A.X + 1
+End Module
+""")
+    assert caught.value.code == -2006 and caught.value.line == 3 and "B.Y" in caught.value.text
+
+
+def test_goto_out_of_a_try_block_runs_its_finally():
+    """GoTo out of a Try's statements to an enclosing label, as field code does (VB.NET runs
+    the Finally on the way out); the manual's own illegal cases stay -2011 (L1717-1736:
+    out of the Catch, `GoTo bad_jump ' ILLEGAL!!!`; into a block; out of a Finally)."""
+    out = output_of("""
+Module M
+    Public Sub Main()
+        Dim n As Integer
+        Try
+            n = 1
+            If n = 1 Then
+                GoTo done
+            End If
+        Catch
+        Finally
+            Console.WriteLine("finally")
+        End Try
+        n = 2
+done:
+        Console.WriteLine(CStr(n))
+    End Sub
+End Module
+""")
+    assert out == "finally\n1\n"
+    for inside in ("Catch\n            GoTo over", "Finally\n            GoTo over"):
+        with pytest.raises(ProgramError) as caught:
+            output_of(f"""
+Module M
+    Public Sub Main()
+        Try
+        {inside}
+        End Try
+over:
+    End Sub
+End Module
+""")
+        assert caught.value.code == -2011
+
+
+def test_line_continuation_without_a_blank_before_the_underscore():
+    """` _` continues a line (manual L1130-ish, ch. 4); Brooks' own code writes `,_`."""
+    out = output_of("""
+Module M
+    Public Sub Main()
+        Console.WriteLine(Add(1,_
+            2) & "|" & my_name())
+    End Sub
+    Function Add(ByVal a As Integer,_
+                 ByVal b As Integer) As Integer
+        Return a + b
+    End Function
+    Function my_name() As String
+        Return "x_"
+    End Function
+End Module
+""")
+    assert out == "3|x_\n"
+
+
+def test_write_only_built_in_properties(tmp_path):
+    """Robot.RapidDecel is write-only (GPL Dictionary): assigning it compiles and runs;
+    reading it is the compiler's undefined symbol."""
+    report = on_cell(tmp_path, """
+        Robot.RapidDecel = True
+        Console.WriteLine("ok")
+""")
+    assert report.errors == []
+    assert report.output == "ok\n"
+
+
+# ------------------------------------------------------------ numeric semantics
+@pytest.mark.parametrize("statement", [
+    "a = big + 1", "a = big * 2", "a = -big - 2", "a += big", "a -= -big", "a *= 3",
+    "cells(1) = big + big", "cells(1) -= big + 2", "k.value = big + 1", "k.value -= big + 2", "a = Twice(big)",
+    "a = big \\ 0.5", "a = CDbl(big) * 4",
+])
+def test_integer_overflow_is_an_error_for_every_store(statement):
+    """Integer is 32-bit (Table 4-1); a value out of its range stored in an Integer (a
+    variable, an array element, a field, a Function's result) is -703 *Numeric overflow*,
+    as Short and Byte are; the program's Try/Catch sees it."""
+    out = output_of(f"""
+Class Counter
+    Public value As Integer
+End Class
+Module M
+    Function Twice(ByVal x As Integer) As Integer
+        Return x * 2
+    End Function
+    Public Sub Main()
+        Dim big As Integer = 2147483647
+        Dim a As Integer = 1000000000
+        Dim cells(2) As Integer
+        Dim k As New Counter
+        Try
+            {statement}
+            Console.WriteLine("no error " & a)
+        Catch ex As Exception
+            Console.WriteLine(CStr(ex.ErrorCode))
+        End Try
+    End Sub
+End Module
+""")
+    assert out == "-703\n"
+
+
+def test_integer_arithmetic_in_range_is_unchanged():
+    out = output_of("""
+Module M
+    Public Sub Main()
+        Dim a As Integer = 2147483646
+        Dim b As Short = 3
+        a += 1
+        b *= 2
+        Console.WriteLine(a & " " & b & " " & (a - 1) & " " & CStr(-2147483647 - 1))
+    End Sub
+End Module
+""")
+    assert out == "2147483647 6 2147483646 -2147483648\n"
+
+
+@pytest.mark.parametrize("expression", ["d * d", "d + d", "-d - d", "d / 1E-300", "d ^ 2", "CDbl(\"1E400\")"])
+def test_double_overflow_is_703_not_infinity(expression):
+    """Double overflow is -703 (docs/gpl.md error table, L1156), never INF: stored, shown
+    or converted."""
+    for use in (f"x = {expression}", f"Console.WriteLine({expression})", f"Console.WriteLine(CStr({expression}))"):
+        out = output_of(f"""
+Module M
+    Public Sub Main()
+        Dim d As Double = 1E308
+        Dim x As Double
+        Try
+            {use}
+            Console.WriteLine("no error " & x)
+        Catch ex As Exception
+            Console.WriteLine(CStr(ex.ErrorCode))
+        End Try
+    End Sub
+End Module
+""")
+        assert out == "-703\n", use
+
+
+def test_not_on_a_number_is_logical():
+    """Table 6-1: Not converts False (0) to True (-1) and any True (<> 0) value to False (0);
+    And / Or / Xor stay bitwise on numbers."""
+    out = output_of("""
+Module M
+    Public Sub Main()
+        Dim n As Integer = 5
+        Dim z As Integer = 0
+        Dim d As Double = 0.5
+        Console.WriteLine((Not n) & " " & (Not z) & " " & (Not d) & " " & (Not False) & " " & (6 And 3))
+        If Not n Then
+            Console.WriteLine("wrong")
+        Else
+            Console.WriteLine("Not 5 is False")
+        End If
+    End Sub
+End Module
+""")
+    assert out == "0 -1 0 True 2\nNot 5 is False\n"
+
+
+def test_compound_assignment_evaluates_its_target_once():
+    """`a(f()) += 1` calls f once (VB.NET semantics of compound assignment)."""
+    out = output_of("""
+Class Box
+    Public v(20) As Integer
+End Class
+Module M
+    Dim calls As Integer
+    Dim shared_box As New Box
+    Function F() As Integer
+        calls += 1
+        Return calls
+    End Function
+    Function GetBox() As Box
+        calls += 10
+        Return shared_box
+    End Function
+    Public Sub Main()
+        Dim a(5) As Integer
+        a(F()) += 7
+        Console.WriteLine(calls & " " & a(1))
+        GetBox().v(F()) += 2
+        Console.WriteLine(calls & " " & shared_box.v(12))
+    End Sub
+End Module
+""")
+    assert out == "1 7\n12 2\n"
+
+
+def test_character_constants_are_codes():
+    """Table 4-4: GPL_CR is the ASCII carriage return character (13), GPL_LF line feed (10);
+    the manual writes `Chr(GPL_CR) & Chr(GPL_LF)` (L2398)."""
+    out = output_of("""
+Module M
+    Public Sub Main()
+        Dim message As String = "Test message" & Chr(GPL_CR) & Chr(GPL_LF)
+        Console.WriteLine(CStr(GPL_CR + GPL_LF) & " " & message.Length & " " & Asc(message.Substring(12, 1)))
+    End Sub
+End Module
+""")
+    assert out == "23 14 13\n"
+
+
+# ------------------------------------------------------------ procedures
+def test_byref_is_a_true_reference():
+    """ch. 10 (L1505-1514) ByRef passes the variable itself: the callee's write is the
+    caller's at once, so it stays when the callee then throws, and two ByRef parameters
+    bound to one variable are that one variable."""
+    out = output_of("""
+Module M
+    Sub SetThenFail(ByRef v As Integer)
+        v = 42
+        Throw New Exception(-786)
+    End Sub
+    Sub Both(ByRef a As Integer, ByRef b As Integer)
+        a = 5
+        Console.WriteLine("b sees " & b)
+        b += 1
+    End Sub
+    Public Sub Main()
+        Dim x As Integer = 1
+        Try
+            SetThenFail(x)
+        Catch
+        End Try
+        Console.WriteLine("after throw " & x)
+        Dim y As Integer = 0
+        Both(y, y)
+        Console.WriteLine("y " & y)
+    End Sub
+End Module
+""")
+    assert out == "after throw 42\nb sees 5\ny 6\n"
+
+
+def test_delegates_in_fields_and_module_variables_are_called_directly():
+    """ch. 10: a Delegate is an object like any other; one stored in a class field or a
+    module variable is called as obj.handler(x) or Module.fallback(x)."""
+    out = output_of("""
+Delegate Function Op(ByVal x As Integer) As Integer
+Delegate Sub Note(ByVal s As String)
+Class Handler
+    Public handler As Op
+    Public notify As Note
+End Class
+Module Ops
+    Public fallback As Op
+    Public Function Twice(ByVal x As Integer) As Integer
+        Return 2 * x
+    End Function
+    Public Function Neg(ByVal x As Integer) As Integer
+        Return -x
+    End Function
+    Public Sub Say(ByVal s As String)
+        Console.WriteLine("say " & s)
+    End Sub
+End Module
+Module M
+    Public Sub Main()
+        Dim h As New Handler
+        h.handler = New Op(AddressOf Ops.Twice)
+        h.notify = New Note(AddressOf Ops.Say)
+        Ops.fallback = New Op(AddressOf Ops.Neg)
+        Console.WriteLine(h.handler(21) & " " & Ops.fallback(3))
+        h.notify("hi")
+    End Sub
+End Module
+""")
+    assert out == "42 -3\nsay hi\n"
+
+
+# ------------------------------------------------------------ library signatures
+def test_library_signatures_field_code_relies_on(tmp_path):
+    """GPL Dictionary: Location.Angles(a1, ..., an) makes an Angles location with one value
+    per robot axis; Profile.Speed2 = 0 is allowed; Exception.UpdateErrorCode with no
+    argument; Robot.TrajState(robot, n); Location.Pos = a Cartesian value on an Angles
+    location makes it Cartesian."""
+    report = on_cell(tmp_path, """
+        Dim a As New Location
+        a.Angles(10, 20, 30, 40)
+        Console.WriteLine(a.Type & " " & a.Angle(2) & " " & a.Angle(4))
+        Dim p As New Profile
+        p.Speed2 = 0
+        Console.WriteLine(CStr(p.Speed2))
+        Dim ex As New Exception(-1025)
+        ex.UpdateErrorCode()
+        ex.UpdateErrorCode
+        Console.WriteLine(CStr(ex.ErrorCode))
+        Console.WriteLine(CStr(Robot.TrajState(1, 0)))
+        Dim c As New Location
+        c.XYZ(300, 10, 200, 0, 180, 0)
+        a.Pos = c
+        Console.WriteLine(a.Type & " " & a.X & " " & a.Y)
+""")
+    assert report.errors == []
+    assert report.output.splitlines() == ["1 20 40", "0", "-1025", "0", "0 300 10"]
+
+
+def test_pallet_order_uses_the_dictionarys_encoding():
+    """GPL Dictionary, RefFrame.PalletOrder: 0 row-column-layer (a new pallet's), 1 row-layer-
+    column, 2 column-row-layer, 3 column-layer-row, 4 layer-row-column, 5 layer-column-row."""
+    out = output_of("""
+Module M
+    Public Sub Main()
+        Dim frame As New RefFrame
+        Dim spot As New Location
+        Dim order As Integer
+        frame.Type = 1
+        frame.Loc.XYZ(0, 0, 0, 0, 0, 0)
+        frame.PalletMaxIndex(1) = 2
+        frame.PalletMaxIndex(2) = 2
+        frame.PalletMaxIndex(3) = 2
+        frame.PalletPitch(1) = 1
+        frame.PalletPitch(2) = 10
+        frame.PalletPitch(3) = 100
+        spot.RefFrame = frame
+        Console.WriteLine(CStr(frame.PalletOrder))
+        For order = 0 To 5
+            frame.PalletOrder = order
+            frame.PalletRowColLay(1, 1, 1)
+            frame.PalletNextPos
+            Console.WriteLine(order & ": " & (spot.Pos.X + spot.Pos.Y + spot.Pos.Z))
+        Next
+    End Sub
+End Module
+""")
+    assert out.splitlines() == ["0", "0: 1", "1: 1", "2: 10", "3: 10", "4: 100", "5: 100"]
+
+
+def test_addressof_an_undefined_procedure_is_undefined_procedure():
+    """AddressOf (or a Delegate's New) of a procedure that does not exist is -710
+    *Undefined procedure*, the code a command server's dispatcher expects; a name given
+    as a String is found when the New runs, and the same code can be caught."""
+    for target in ("Missing", "M.Missing"):
+        with pytest.raises(ProgramError) as caught:
+            output_of(f"""
+Delegate Sub Cmd()
+Module M
+    Public Sub Main()
+        Dim d As New Cmd(AddressOf {target})
+    End Sub
+End Module
+""")
+        assert caught.value.code == -710 and caught.value.line == 5
+    out = output_of("""
+Delegate Sub Cmd()
+Module M
+    Public Sub Main()
+        Try
+            Dim d As New Cmd("NoSuchCommand")
+        Catch ex As Exception
+            Console.WriteLine(CStr(ex.ErrorCode))
+        End Try
+    End Sub
+End Module
+""")
+    assert out == "-710\n"

@@ -851,8 +851,8 @@ End Module
 
 def test_catch_as_exception_and_nested_declaration_error():
     """VB.NET's `Catch e As Exception` and `For k As Integer` declare e and k
-    (twin accepts them); a Dim nested in a block is an error wherever it is
-    (ch. 4, L712)."""
+    (twin accepts them); a Dim nested in a block is allowed (issue 10: Precise's own
+    code does it), but the same name in two blocks with different types is -2003."""
     out = output_of("""
 Sub Main()
     Dim x As Integer
@@ -875,11 +875,13 @@ Sub Main()
     For i = 1 To 2
         If i = 2 Then
             Dim late As Integer
+        Else
+            Dim late As String
         End If
     Next
 End Sub
 """)
-    assert err.value.code == -2006 and err.value.line == 6
+    assert err.value.code == -2003 and err.value.line == 8
 
 
 def test_short_circuit_with_byref_calls():

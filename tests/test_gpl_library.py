@@ -200,7 +200,7 @@ def test_pallet_frame_steps_rows_then_columns_and_wraps(rt):
         seen.append((round(p.X, 9), round(p.Y, 9)))
         pallet.PalletNextPos()
     assert seen == [(100, 200), (100, 210), (100, 220), (80, 200), (80, 210), (80, 220), (100, 200)]
-    pallet.PalletOrder = 213
+    pallet.PalletOrder = 2  # GPL Dictionary: column, row, layer
     pallet.PalletRowColLay(1, 1)
     pallet.PalletNextPos()
     assert (pallet.PalletIndex(1), pallet.PalletIndex(2)) == (1, 2)

@@ -251,8 +251,9 @@ def _main(body: str, extra: str = "") -> dict[str, str]:
 # (case id, files, code, file, line, column): the first error of the project.
 MALFORMED = [
     ("array initialiser", _main("        Dim a() As Double = {1, 2}\n"), -2001, "Main.gpl", 3, 29),
-    ("Dim inside a block", _main("        If True Then\n            Dim k As Integer\n        End If\n"),
-     -2006, "Main.gpl", 4, 13),
+    ("Dim in two blocks with two types", _main("        If True Then\n            Dim k As Integer\n"
+                                                "        Else\n            Dim k As String\n        End If\n"),
+     -2003, "Main.gpl", 6, 17),
     ("missing End If", _main("        If 1 > 0 Then\n            Console.WriteLine(1)\n"), -2001, "Main.gpl", 5, 9),
     ("Next without For", _main("        Next\n"), -2001, "Main.gpl", 3, 9),
     ("unterminated string", _main('        Console.WriteLine("abc)\n'), -2001, "Main.gpl", 3, 27),

@@ -267,3 +267,62 @@ def test_tray_cells_and_their_centres():
     assert tray.cell_centre_mm(5) == [230.0, 37.5, 800.0]  # next row: +y
     assert tray.cell_of(np.array([0.275 + 0.02, -0.0075 - 0.02, 0.81])) == 1
     assert tray.cell_of(np.array([0.0, 0.0, 0.81])) is None
+
+
+# ---------------------------------------------------------------- recording and reach
+class ScalarProbe:
+    """Recorder stand-in: which time series the run sends."""
+
+    def __init__(self):
+        self.series: dict[str, list[tuple[float, float]]] = {}
+
+    def wants_frame(self, t: float) -> bool:
+        return True
+
+    def sample(self, t: float, data) -> None:
+        """Poses are not needed here."""
+
+    def log_scalar(self, name: str, t: float, value: float) -> None:
+        self.series.setdefault(name, []).append((t, value))
+
+    def log_text(self, *args, **kwargs) -> None:
+        """Not needed."""
+
+
+def test_the_recording_has_belt_speed_encoder_counts_and_sensor_states():
+    from twin.simulation import Simulation
+
+    sim = Simulation(SCENE)
+    sim.recorder = probe = ScalarProbe()
+    sim.run(max_sim_time=3.0)
+    s = probe.series
+    assert {"conveyor/infeed/speed_mm_s", "conveyor/infeed/encoder_1", "sensor/infeed_eye"} <= set(s)
+    t, counts = s["conveyor/infeed/encoder_1"][-1]
+    assert counts == pytest.approx(100.0 * t * 10.0, abs=1)
+    assert max(v for _, v in s["sensor/infeed_eye"]) == 1.0  # the first part broke the beam
+    assert ("signals/1001" in s) and s["signals/1001"][0][1] == 1.0  # and its input changed
+
+
+@pytest.mark.parametrize("scene", ["scara_conveyor", "scara_conveyor_suction"])
+def test_the_conveyor_cells_taught_locations_are_reachable(scene):
+    from twin.physics.geometry import vplus_to_matrix
+
+    cell = Cell.from_scene(ROOT / "scenes" / f"{scene}.toml")
+    kin, q = cell.kinematics, cell.robot_qpos()
+    locs = cell.locations()
+    tray = cell.trays["tray"]
+    for name, shift in [("belt_pick", (x, 0)) for x in (-300.0, 0.0, 300.0)] + \
+                       [("tray_origin", (45.0 * c, 45.0 * r)) for r in (0, 3) for c in (0, 4)]:
+        loc = list(locs[name])
+        loc[0] += shift[0]
+        loc[1] += shift[1]
+        q = kin.ik(vplus_to_matrix(loc), q, righty=True)
+        assert q is not None and 0.0 <= q[2] <= 0.21, (name, shift)
+    # tray_origin is over cell 0, at the right height above the tray floor.
+    cell.data.qpos[cell.robot.qadr] = kin.ik(vplus_to_matrix(locs["tray_origin"]), q, righty=True)
+    import mujoco
+    mujoco.mj_kinematics(cell.model, cell.data)
+    tcp = cell.data.site(f"{cell.gripper.prefix}tcp").xpos
+    assert np.allclose(tcp[:2], tray.cell_centres[0][:2], atol=1e-6)
+    expected = 0.012 if scene == "scara_conveyor" else 0.022  # part centre / part top, 2 mm up
+    assert tcp[2] - tray.cell_centres[0][2] == pytest.approx(expected, abs=1e-4)

@@ -166,6 +166,21 @@ WRITTEN_CASES = [
     (["REACT 5, t"], msg.ILLEGAL_SIGNAL, 1),
     (["WAIT.EVENT , loc"], msg.WRONG_TYPE, 1),
     (['WAIT.EVENT , "a"'], msg.WRONG_TYPE, 1),
+    # keyed statements and the library's special forms
+    (['BITS 1, 8 = "a"'], msg.WRONG_TYPE, 1),
+    (["BITS 1, 8 = loc"], msg.WRONG_TYPE, 1),
+    (['BITS "a", 8 = 1'], msg.WRONG_TYPE, 1),
+    (["TIMER 1 = loc"], msg.WRONG_TYPE, 1),
+    (["DECOMPOSE d[] = n"], msg.WRONG_TYPE, 1),
+    (["PACK $a[0], 1, 3 = 5"], msg.WRONG_TYPE, 1),
+    (["SOLVE.ANGLES j[], f, e = n, j[], 0"], msg.WRONG_TYPE, 1),
+    (['y = TAS(n, "a")'], msg.WRONG_TYPE, 1),
+    (["y = TAS(n, loc)"], msg.WRONG_TYPE, 1),
+    (["$t = $DECODE($s, 5, 0)"], msg.WRONG_TYPE, 1),
+    (['a[0] = 1', '$u = $UNPACK(a[0], "x", 1)'], msg.WRONG_TYPE, 2),
+    (["x = LAST(n)"], msg.WRONG_TYPE, 1),
+    (["x = PARAMETER(NO.SUCH.THING)"], msg.ILLEGAL_VALUE, 1),
+    (["ENABLE NO.SUCH.SWITCH"], msg.ILLEGAL_VALUE, 1),
     # malformed statements
     (["x = (1"], msg.SYNTAX_ERROR, 1),
     (["x = 1)"], msg.SYNTAX_ERROR, 1),
@@ -207,6 +222,31 @@ def test_written_cases(body, code, line):
         return
     where = line + (0 if line <= len(declarations) else len(PROLOGUE))
     assert_located(err, code, 1 + where, body[line - 1])
+
+
+@pytest.mark.parametrize("section, code", [
+    (".LOCATIONS\nspot 1 2\n.END", msg.SYNTAX_ERROR),
+    (".LOCATIONS\nspot a b c d e f\n.END", msg.SYNTAX_ERROR),
+    (".LOCATIONS\n$s 1 2 3 4 5 6\n.END", msg.WRONG_TYPE),
+    (".LOCATIONS\nspot 1E400 0 0 0 0 0\n.END", msg.OVERFLOW),
+    (".REALS\nx =\n.END", msg.SYNTAX_ERROR),
+    (".REALS\nx = 1E400\n.END", msg.OVERFLOW),
+    (".REALS\nx = 1E39\n.END", msg.OVERFLOW),
+    (".REALS\n$s = 1\n.END", msg.WRONG_TYPE),
+    (".REALS\n#p = 1\n.END", msg.WRONG_TYPE),
+    (".REALS\nx[-1] = 5\n.END", msg.SYNTAX_ERROR),
+    (".STRINGS\ns = \"a\"\n.END", msg.WRONG_TYPE),
+    (".STRINGS\n$s = \"open\n.END", msg.SYNTAX_ERROR),
+    (".STRINGS\n$s = \"" + "x" * 129 + "\"\n.END", msg.STRING_TOO_LONG),
+    (".DOUBLES\nd = abc\n.END", msg.SYNTAX_ERROR),
+])
+def test_broken_data_sections_are_located_errors(section, code):
+    # docs/vplus.md "Program files": the layout STOREL/STORER/STORES write; values as in
+    # programs ([000] "String Data Type", L3868-3895).
+    with pytest.raises(ProgramError) as caught:
+        run_vplus(".PROGRAM t()\n.END\n" + section + "\n")
+    err = caught.value
+    assert err.code == code and err.line == 4 and err.text == section.split("\n")[1], str(err)
 
 
 @pytest.mark.parametrize("depth", [100, MAX_NESTING])
@@ -295,3 +335,18 @@ def test_argument_checks_come_from_the_keyword_signatures():
     assert argument_check(FUNCTIONS["LEN"], 0) == "_str"
     assert inspect.signature(FUNCTIONS["MAX"]).parameters  # *xs: every argument a real
     assert argument_check(FUNCTIONS["MAX"], 7) == "_real"
+
+
+@pytest.mark.parametrize("seconds", ["1E6", "1E30"])
+def test_a_very_long_delay_is_a_wait_in_constant_memory(seconds):
+    # Issue #14: DELAY 1E6 allocated a sampled standing-still trajectory (15 GiB) and
+    # DELAY 1E30 crashed.  DELAY is a motion that stands still ([000] motion table): its
+    # samples are broadcast views of one row, whatever its length (docs/motion.md).
+    from test_motion_controller import run_on_cell
+
+    text = f'.PROGRAM t()\n    DELAY {seconds}\n    TYPE "forward"\n.END\n'
+    sim, task, outcome, rows = run_on_cell(text, max_time=0.5)
+    assert task.error is None and task.system.console.output == "forward\n"  # forward processing
+    (still,) = sim.controller._motions
+    assert still.q.strides[0] == 0 and still.qd.strides[0] == 0 and still.delta.strides[0] == 0
+    assert still.last >= 0.5 / sim.controller.dt  # it is still standing still when the run ends

@@ -65,7 +65,7 @@ except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
 from twin.outputs import write_atomically
-from twin.report import COUNT_NAMES, Report, ReportError
+from twin.report import COUNT_NAMES, VISION_COUNT_NAMES, Report, ReportError
 
 __all__ = ["check", "evaluate", "load_expect", "main_check", "ExpectError", "Outcome"]
 
@@ -177,7 +177,7 @@ SECTIONS = {
     "parts": {"total", "dropped", "unplaced"},
     "time": {"sim_time_s", "wall_time_s", "realtime_factor", "cycle_time_s", "place_regions"},
     "program": {"errors", "output_contains", "output_excludes"},
-    "counts": set(COUNT_NAMES),
+    "counts": set(COUNT_NAMES) | set(VISION_COUNT_NAMES),
     "events": None,    # free names
 }
 

@@ -4,6 +4,7 @@
                      [--max-sim-time S] [--max-wall-time S] [--no-progress-limit S] [--seed N]
     twin check REPORT --expect EXPECT.toml [--junit FILE.xml]
     twin serve PROGRAM|PROJECT_DIR [--scene SCENE] [--fast] [--viewer] [--report R.json] ...
+    twin calibrate SCENE [--camera NAME]
 
 A user's mistake (bad syntax, an unreachable location, a missing file) is
 printed as the controller would print it, with file and line, and never as a
@@ -207,6 +208,17 @@ def _run(args: argparse.Namespace) -> int:
     return EXIT_PROGRAM_ERROR if report.errors else EXIT_OK
 
 
+def _port_pair(text: str) -> tuple[int, int]:
+    program, sep, real = text.partition("=")
+    try:
+        pair = int(program), int(real)
+    except ValueError:
+        pair = None
+    if not sep or pair is None or not all(0 <= p <= 65535 for p in pair):
+        raise argparse.ArgumentTypeError(f"{text!r}: expected PROGRAM=REAL port numbers, e.g. 10100=0")
+    return pair
+
+
 def _serve(args: argparse.Namespace) -> int:
     """Keep the cell running for client software (twin/serve.py)."""
     from .serve import serve_program
@@ -215,7 +227,7 @@ def _serve(args: argparse.Namespace) -> int:
     try:
         result = serve_program(args.program, scene=args.scene, main=args.main, report_path=args.report,
                                rrd_path=args.rrd, viewer=args.viewer, fast=args.fast, speed=args.speed,
-                               seed=args.seed, max_sim_time=args.max_sim_time)
+                               seed=args.seed, max_sim_time=args.max_sim_time, ports=dict(args.port))
     except ProgramError as err:
         print(str(err), file=sys.stderr)
         return 2 if err.code is None else 1
@@ -232,6 +244,21 @@ def _check(args: argparse.Namespace) -> int:
     if args.junit:
         argv += ["--junit", args.junit]
     return main_check(argv)
+
+
+def _calibrate(args: argparse.Namespace) -> int:
+    from .vision.calibrate import calibrate_scene
+
+    try:
+        done = calibrate_scene(args.scene, args.camera)
+    except (ValueError, OSError, ProgramError) as err:
+        print(f"twin calibrate: {err}", file=sys.stderr)
+        return 2
+    for config, model, path in done:
+        print(f"camera {config.name}: {model.points} target sightings, residual {model.residual_mm:.3f} mm RMS "
+              f"({model.residual_max_mm:.3f} mm max, {model.residual_px:.3f} px); focal length "
+              f"{model.K[0, 0]:.1f} px; written to {path}")
+    return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -269,6 +296,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="simulated seconds per wall second (default 1)")
     serve.add_argument("--max-sim-time", type=float, default=float("inf"), help="stop after this many simulated seconds")
     serve.add_argument("--seed", type=non_negative_int, default=None, help="random seed (default: the scene's)")
+    serve.add_argument("--port", type=_port_pair, action="append", default=[], metavar="PROGRAM=REAL",
+                       help="listen on loopback port REAL where the program asks for PROGRAM (0: any free "
+                       "port; the ports used are printed); may be repeated")
     serve.set_defaults(handler=_serve)
 
     check = sub.add_parser("check", help="check a report against expectations")
@@ -276,6 +306,11 @@ def build_parser() -> argparse.ArgumentParser:
     check.add_argument("--expect", required=True)
     check.add_argument("--junit", default=None, help="also write a JUnit XML report")
     check.set_defaults(handler=_check)
+
+    calibrate = sub.add_parser("calibrate", help="calibrate a cell's cameras from images (docs/vision.md)")
+    calibrate.add_argument("scene", help="cell description with [[camera]] and [camera.calibration]")
+    calibrate.add_argument("--camera", default=None, help="only this camera")
+    calibrate.set_defaults(handler=_calibrate)
     return parser
 
 

@@ -17,6 +17,7 @@ Entity layout in the viewer::
     program/log                       TYPE output and errors (TextLog)
     cell/events                       grasp, release, slip, drop, collision... (TextLog)
     signals/<n>                       digital signals as 0/1 scalars, at each change
+    vision/<camera>                   pictures as taken, with the locators' outlines and poses
     <name>                            anything sent with ``log_scalar``
 
 Bodies are flat under ``world`` (each carries its world pose, not a pose relative to
@@ -238,6 +239,20 @@ class Recorder:
             return
         self.rec.set_time(TIMELINE, duration=sim_time)
         self.rec.log(path, rr.TextLog(text, level=level))
+
+    def log_image(self, path: str, sim_time: float, rgb: np.ndarray, strips: list[np.ndarray] | None = None,
+                  points: np.ndarray | None = None, labels: list[str] | None = None) -> None:
+        """A camera picture at `sim_time` (sent at once: pictures are taken rarely), with
+        optional 2-D overlays in its pixel coordinates: outlines (closed line strips) under
+        ``path/outlines``, points with labels under ``path/found``."""
+        if not self.enabled or self._closed:
+            return
+        self.rec.set_time(TIMELINE, duration=sim_time)
+        self.rec.log(path, rr.Image(rgb))
+        if strips:
+            self.rec.log(f"{path}/outlines", rr.LineStrips2D(strips, colors=[0, 255, 0]))
+        if points is not None and len(points):
+            self.rec.log(f"{path}/found", rr.Points2D(points, labels=labels, radii=3.0, colors=[255, 64, 0]))
 
     def log_scalar(self, name: str, sim_time: float, value: float) -> None:
         """One sample of a signal; buffered and sent with send_columns."""

@@ -49,6 +49,8 @@ a tray cell).
 Counts: ``counts`` (optional; the cell writes it) has ``created`` (parts brought in),
 ``picked``, ``placed`` (ended in a place region, neither dropped nor missed), ``missed``
 and ``dropped``: non-negative integers, checkable as ``[counts]`` in an expectation file.
+A vision cell adds ``located``, ``not_found`` and ``rejected`` (what the vision server told
+the programs: docs/vision.md).
 ``components`` (optional) holds each cell component's own figures, keyed
 ``<kind>.<name>`` (free fields: a conveyor's speed, travel and encoder count, a sensor's
 breaks, a tray's cell centres...).
@@ -72,7 +74,7 @@ from .outputs import write_atomically
 
 FORMAT_VERSION = 1
 
-__all__ = ["Report", "ReportError", "count_regions", "COUNT_NAMES", "FORMAT_VERSION"]
+__all__ = ["Report", "ReportError", "count_regions", "COUNT_NAMES", "VISION_COUNT_NAMES", "FORMAT_VERSION"]
 
 
 class ReportError(Exception):
@@ -89,6 +91,7 @@ def count_regions(parts: list[dict]) -> dict[str, int]:
 _PART_REQUIRED = {"id", "pose", "region", "dropped"}
 _PART_OPTIONAL = {"type": (str,), "picked": (bool,), "missed": (bool,), "tray": (str,), "cell": (int,)}
 COUNT_NAMES = ("created", "picked", "placed", "missed", "dropped")
+VISION_COUNT_NAMES = ("located", "not_found", "rejected")  # in a cell with [vision] (docs/vision.md)
 
 _ERROR_KEYS = {"code": (int, type(None)), "message": (str,), "file": (str, type(None)),
                "line": (int, type(None)), "column": (int, type(None)),

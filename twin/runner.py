@@ -74,6 +74,7 @@ def _start_vplus(sim: Simulation, programs: list[Path], main: str | None, consol
     """Load every V+ file (LOAD of several modules); the first file's first program starts."""
     system = VPlusSystem(sim.controller, sim.io, sim.clock, console=console, seed=sim.cell.seed,
                          sandbox=sandbox)
+    system.vision = sim.vision
     for name, location in sim.taught_locations().items():
         system.define_location(name, location)
     names = system.load_files(programs)
@@ -92,6 +93,7 @@ def _start_gpl(sim: Simulation, project: Path, main: str | None, console: Consol
     (`main` overrides it)."""
     system = GplSystem(sim.controller, sim.io, sim.clock, sim.scheduler, console=console, sandbox=sandbox,
                        seed=sim.cell.seed)
+    system.vision = sim.vision
     system.load_project(project)
     try:
         system.start(main)
@@ -180,6 +182,8 @@ def start_program(program: str | Path | list[str | Path], scene: str | Path | No
         raise ProgramError(f"sandbox folder {err}", file=str(sandbox)) from None
     own_recording = recorder is None and rrd_path is not None
     sim.recorder = recorder(sim) if recorder is not None else _open_recorder(sim, rrd_path)
+    if sim.vision is not None:
+        sim.vision.recorder = sim.recorder
     started = StartedRun(program, scene, sim, None, report_path, rrd_path if own_recording else None)
     try:
         if program.is_dir():
@@ -208,6 +212,8 @@ def finish_run(started: StartedRun, outcome) -> RunResult:
                                                 started.scene, started.report_path)
     if isinstance(system, VPlusSystem):
         system.devices.close_network()  # a run stopped early still frees its ports
+    if sim.vision is not None:
+        sim.vision.close()  # its port and renderers
     if sim.recorder is not None:
         sim.recorder.log_text(sim.cell.time, system.console.output or "(no output)")
         sim.recorder.close()
@@ -221,7 +227,8 @@ def finish_run(started: StartedRun, outcome) -> RunResult:
         sim_time_s=round(outcome.sim_time_s, 6), wall_time_s=round(outcome.wall_time_s, 3),
         output=system.console.output, errors=outcome.errors, parts=parts,
         regions=sim.cell.region_counts(parts), events=events, cycle_times_s=cycle_times(events),
-        counts=sim.cell.counts(parts), components=sim.cell.components_report(),
+        counts={**sim.cell.counts(parts), **(sim.vision.report_counts() if sim.vision is not None else {})},
+        components=sim.cell.components_report(),
     )
     if report_path is not None:
         report.write(report_path)

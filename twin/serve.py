@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 from typing import Callable, TextIO
 
-from .controller.network import listening_ports
+from .controller import network
 from .runner import RunResult, finish_run, start_program
 
 
@@ -29,17 +29,19 @@ class Pacer:
     def __init__(self, clock: Callable[[], float], fast: bool, speed: float, out: TextIO):
         self.clock, self.fast, self.speed, self.out = clock, fast, speed, out
         self.stop_requested = False
-        self.ports: set[int] = set()
+        self.ports: dict[int, int] = {}
         self._start_wall = time.perf_counter()
         self._start_sim = clock()
 
     def __call__(self) -> bool:
-        if listening_ports != self.ports:
-            for port in sorted(listening_ports - self.ports):
-                print(f"twin serve: listening on 127.0.0.1:{port}", file=self.out, flush=True)
-            for port in sorted(self.ports - listening_ports):
+        if network.listening != self.ports:
+            for port in sorted(set(network.listening) - set(self.ports)):
+                asked = network.listening[port]
+                moved = "" if asked == port else f" (port {asked} in the program)"
+                print(f"twin serve: listening on 127.0.0.1:{port}{moved}", file=self.out, flush=True)
+            for port in sorted(set(self.ports) - set(network.listening)):
                 print(f"twin serve: closed 127.0.0.1:{port}", file=self.out, flush=True)
-            self.ports = set(listening_ports)
+            self.ports = dict(network.listening)
         if not self.fast:
             due = self._start_wall + (self.clock() - self._start_sim) / self.speed
             delay = due - time.perf_counter()
@@ -54,8 +56,11 @@ class Pacer:
 def serve_program(program: str | Path, scene: str | Path | None = None, main: str | None = None,
                   report_path: str | Path | None = None, rrd_path: str | Path | None = None,
                   viewer: bool = False, fast: bool = False, speed: float = 1.0, seed: int | None = None,
-                  max_sim_time: float = float("inf"), out: TextIO = sys.stderr) -> RunResult:
-    """Run `program` on `scene` until it ends, Ctrl-C, or `max_sim_time`."""
+                  max_sim_time: float = float("inf"), ports: dict[int, int] | None = None,
+                  out: TextIO = sys.stderr) -> RunResult:
+    """Run `program` on `scene` until it ends, Ctrl-C, or `max_sim_time`.  `ports` moves
+    the program's ports (program port -> real loopback port, 0: any free one)."""
+    network.port_map.update(ports or {})
     recorder = None
     if viewer:
         from .recorder import Recorder

@@ -23,6 +23,7 @@ from .controller.watchdog import (DEADLOCK_CONFIRM_S, DEFAULT_NO_PROGRESS_S, Wat
 from .errors import ProgramError
 from .physics.cell import Cell
 from .resources import bundled
+from .vision.server import VisionServer
 
 MAJOR_CYCLE_S = 0.016
 AT_REST_SPEED = 1e-3  # m/s or rad/s: a body slower than this is not moving (watchdog)
@@ -55,6 +56,7 @@ class Simulation:
         self.controller = VirtualController(self.cell, self.kinematics, settings)
         self.scheduler = Scheduler()
         self.recorder = recorder
+        self.vision = VisionServer.for_cell(self.cell, self.cell.scene, self.scene_path)  # None without [vision]
         self._events_recorded = 0  # cell events already sent to the recorder
         self.settle_s = float(controller_cfg.get("settle_after_program_s", 3.0))
         no_progress = float(controller_cfg.get("no_progress_s", DEFAULT_NO_PROGRESS_S))

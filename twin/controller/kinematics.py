@@ -3,16 +3,20 @@
 `RobotKinematics` works in SI (m, rad) and in the robot base frame.  Forward
 kinematics and Jacobians come from pinocchio.  Inverse kinematics:
 
-* SCARA (detected from the model: revolute, revolute, prismatic, revolute, all
-  axes vertical): closed form for the requested arm configuration, with the link
-  lengths and offsets read from the pinocchio model's joint placements, then a
-  Newton refinement on the pinocchio model (normally zero or one step).
+* SCARA (detected from the model: two revolute arm joints, a prismatic one and a
+  revolute wrist, all axes vertical, in either of the two orders robots use:
+  revolute, revolute, prismatic, revolute as on the Cobra, or prismatic first, a
+  vertical column carrying the arm, as on the PreciseFlex PF400): closed form for
+  the requested arm configuration, with the link lengths and offsets read from
+  the pinocchio model's joint placements, then a Newton refinement on the
+  pinocchio model (normally zero or one step).
 * any other chain (e.g. a Cartesian X/Y/Z/theta gantry): damped least squares
   on the pinocchio model from the seed.
 
 A robot with 4 joints controls x, y, z and the rotation about the vertical; the
-tool must point along the flange's home orientation's Z (for the Cobra, down):
-a target tilted by more than `TILT_TOLERANCE` is out of range.
+flange's orientation can only turn about the vertical from its home orientation
+(the Cobra's flange points down, the PF400's horizontally): a target tilted by
+more than `TILT_TOLERANCE` is out of range.
 
 V+ errors raised as `KinematicsError` (code, text):
 
@@ -94,27 +98,51 @@ def _read_numeric(path: Path) -> tuple[str, dict[str, np.ndarray]]:
     return model, out
 
 
+SCARA_LAYOUTS = {"RRPR": (0, 1, 2, 3), "PRRR": (1, 2, 0, 3)}  # joint kinds -> (shoulder, elbow, slide, wrist)
+
+
+def _joint_kinds(model: pin.Model) -> str:
+    """'R' or 'P' per joint of a 4-joint chain whose axes are all vertical, else ''."""
+    data = model.createData()
+    q0 = pin.neutral(model)
+    pin.computeJointJacobians(model, data, q0)
+    J = pin.getJointJacobian(model, data, 4, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+    ez = np.array([0.0, 0.0, 1.0])
+    kinds = ""
+    for i in range(4):
+        lin, ang = J[:3, i], J[3:, i]
+        if abs(abs(ang @ ez) - 1) < 1e-9:
+            kinds += "R"
+        elif np.linalg.norm(ang) < 1e-12 and abs(abs(lin @ ez) - 1) < 1e-9:
+            kinds += "P"
+        else:
+            return ""
+    return kinds
+
+
 class _Scara:
-    """Closed-form geometry of a SCARA, read from a pinocchio model at q = 0."""
+    """Closed-form geometry of a SCARA, read from a pinocchio model at q = 0.  The joint
+    indices (`shoulder`, `elbow_joint`, `slide`, `wrist`) follow the robot's layout."""
 
     def __init__(self, kin: "RobotKinematics"):
         model, data = kin.model, kin.model.createData()
+        self.shoulder, self.elbow_joint, self.slide, self.wrist = SCARA_LAYOUTS[_joint_kinds(model)]
         q0 = pin.neutral(model)
         pin.forwardKinematics(model, data, q0)
         pin.updateFramePlacements(model, data)
         pin.computeJointJacobians(model, data, q0)
         J = pin.getJointJacobian(model, data, 4, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
         # World direction of each joint axis at q = 0 (angular part for hinges, linear for the slide).
-        axes = [J[3:, 0], J[3:, 1], J[:3, 2], J[3:, 3]]
-        self.s1, self.s2, self.s4 = (float(np.sign(axes[i][2])) for i in (0, 1, 3))
-        self.a3 = float(axes[2][2])  # dz of the J4 origin per unit of J3
-        o = [data.oMi[i].translation.copy() for i in range(5)]
-        self.p1 = o[1][:2]
-        d12, d24 = o[2][:2] - o[1][:2], o[4][:2] - o[2][:2]
+        self.s1, self.s2, self.s4 = (float(np.sign(J[5, i])) for i in (self.shoulder, self.elbow_joint, self.wrist))
+        self.a3 = float(J[2, self.slide])  # dz of the wrist origin per unit of the slide
+        o = [data.oMi[i].translation.copy() for i in range(5)]  # joint origins, o[i] of joint i (1-based)
+        shoulder, elbow, wrist = (o[i + 1] for i in (self.shoulder, self.elbow_joint, self.wrist))
+        self.p1 = shoulder[:2]
+        d12, d24 = elbow[:2] - shoulder[:2], wrist[:2] - elbow[:2]
         self.l1, self.l2 = float(np.hypot(*d12)), float(np.hypot(*d24))
         self.alpha1 = math.atan2(d12[1], d12[0])  # world angle of link 1 at q = 0
         self.beta = math.atan2(d24[1], d24[0])  # world angle of link 2 at q = 0
-        self.z4 = float(o[4][2])
+        self.z4 = float(wrist[2])
         self.R4 = data.oMi[4].rotation.copy()
         self.M4f_inv = (data.oMi[4].inverse() * data.oMf[kin.frame_id]).inverse().homogeneous
         self.flange_in_j4 = (data.oMi[4].inverse() * data.oMf[kin.frame_id]).translation.copy()
@@ -125,20 +153,13 @@ class _Scara:
 
     @staticmethod
     def valid(model: pin.Model) -> bool:
-        if model.nq != 4 or model.nv != 4:
-            return False
-        data = model.createData()
-        q0 = pin.neutral(model)
-        pin.computeJointJacobians(model, data, q0)
-        J = pin.getJointJacobian(model, data, 4, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
-        ez = np.array([0.0, 0.0, 1.0])
-        for i, kind in enumerate("RRPR"):
-            lin, ang = J[:3, i], J[3:, i]
-            if kind == "R" and not (abs(abs(ang @ ez) - 1) < 1e-9):
-                return False
-            if kind == "P" and not (np.linalg.norm(ang) < 1e-12 and abs(abs(lin @ ez) - 1) < 1e-9):
-                return False
-        return True
+        return model.nq == 4 and model.nv == 4 and _joint_kinds(model) in SCARA_LAYOUTS
+
+    def joints(self, shoulder, elbow, slide, wrist) -> np.ndarray:
+        """The joint vector in the robot's order."""
+        q = np.empty(4)
+        q[[self.shoulder, self.elbow_joint, self.slide, self.wrist]] = shoulder, elbow, slide, wrist
+        return q
 
 
 class RobotKinematics:
@@ -204,16 +225,17 @@ class RobotKinematics:
         s = self.scara
         if s is None:
             return np.array([self.fk(q)[:3, 3] for q in Q])
-        t1 = s.alpha1 + s.s1 * Q[:, 0]
-        t2 = s.beta + s.s1 * Q[:, 0] + s.s2 * Q[:, 1]
-        psi = s.s1 * Q[:, 0] + s.s2 * Q[:, 1] + s.s4 * Q[:, 3]
+        q1, q2, q3, q4 = Q[:, s.shoulder], Q[:, s.elbow_joint], Q[:, s.slide], Q[:, s.wrist]
+        t1 = s.alpha1 + s.s1 * q1
+        t2 = s.beta + s.s1 * q1 + s.s2 * q2
+        psi = s.s1 * q1 + s.s2 * q2 + s.s4 * q4
         out = np.empty((len(Q), 3))
         # Flange offset from the J4 origin, turned with the J4 frame about the vertical.
         r = s.R4 @ s.flange_in_j4
         c, si = np.cos(psi), np.sin(psi)
         out[:, 0] = s.p1[0] + s.l1 * np.cos(t1) + s.l2 * np.cos(t2) + c * r[0] - si * r[1]
         out[:, 1] = s.p1[1] + s.l1 * np.sin(t1) + s.l2 * np.sin(t2) + si * r[0] + c * r[1]
-        out[:, 2] = s.z4 + s.a3 * Q[:, 2] + r[2]
+        out[:, 2] = s.z4 + s.a3 * q3 + r[2]
         return out
 
     def jacobian(self, q: np.ndarray) -> np.ndarray:
@@ -225,11 +247,11 @@ class RobotKinematics:
 
     def is_righty(self, q: np.ndarray) -> bool:
         """SCARA arm configuration: RIGHTY when the elbow turns link 2 counter-clockwise
-        from link 1 seen from above (for the Cobra model: J2 > 0; the stretched arm, J2 = 0,
-        counts as RIGHTY).  Robots without an elbow configuration report True."""
+        from link 1 seen from above (for the Cobra model: J2 > 0, for the PF400: J3 > 0; the
+        stretched arm counts as RIGHTY).  Robots without an elbow configuration report True."""
         if self.scara is None:
             return True
-        return bool(self.scara.elbow(q[1]) >= 0.0)
+        return bool(self.scara.elbow(q[self.scara.elbow_joint]) >= 0.0)
 
     def within_limits(self, q: np.ndarray) -> bool:
         return bool(np.all(q >= self.lower - LIMIT_EPS) and np.all(q <= self.upper + LIMIT_EPS))
@@ -241,11 +263,10 @@ class RobotKinematics:
 
     # ------------------------------------------------------------ inverse
     def _tilt_ok(self, R: np.ndarray) -> bool:
-        """For 4 joints the tool Z must stay parallel to the flange's home Z."""
+        """For 4 joints the flange may only turn about the vertical from its home orientation."""
         if self.model.nv != 4:
             return True
-        z_home = self._home_rotation[:, 2]
-        return float(R[:, 2] @ z_home) >= math.cos(TILT_TOLERANCE)
+        return float((R @ self._home_rotation.T)[2, 2]) >= math.cos(TILT_TOLERANCE)
 
     def ik(self, T: np.ndarray, q_seed: np.ndarray, righty: bool | None = None, *,
            continuous: bool = False, single: bool = False) -> np.ndarray:
@@ -293,11 +314,12 @@ class RobotKinematics:
         q3 = (P[2] - s.z4) / s.a3
         lo, hi = self.lower, self.upper
         within = not continuous
-        q1 = _branch_nearest(q1, seed[0], lo[0], hi[0], within)
-        q2 = _branch_nearest(q2, 0.0, lo[1], hi[1], True)  # the elbow angle is not multi-turn
+        i1, i2, i4 = s.shoulder, s.elbow_joint, s.wrist
+        q1 = _branch_nearest(q1, seed[i1], lo[i1], hi[i1], within)
+        q2 = _branch_nearest(q2, 0.0, lo[i2], hi[i2], True)  # the elbow angle is not multi-turn
         q4 = s.s4 * (psi - s.s1 * q1 - s.s2 * q2)
-        q4 = _branch_nearest(q4, seed[3], lo[3], hi[3], within)
-        return np.array([q1, q2, q3, q4])
+        q4 = _branch_nearest(q4, seed[i4], lo[i4], hi[i4], within)
+        return s.joints(q1, q2, q3, q4)
 
     def _task_error(self, T: np.ndarray, M: pin.SE3) -> np.ndarray:
         e = np.empty(6)

@@ -235,7 +235,8 @@ def _segment_clear_of_hole(kin: RobotKinematics, P0: np.ndarray, P1: np.ndarray,
     geometrically, more where the J2 range stops the elbow folding.  A straight line must
     not cross that disc (its end points can both lie outside it)."""
     s = kin.scara
-    g = sorted(float(s.beta - s.alpha1 + s.s2 * lim) for lim in (kin.lower[1], kin.upper[1]))
+    elbow = s.elbow_joint
+    g = sorted(float(s.beta - s.alpha1 + s.s2 * lim) for lim in (kin.lower[elbow], kin.upper[elbow]))
     g = [min(max(v, 0.0), math.pi) for v in g] if righty else [min(max(v, -math.pi), 0.0) for v in g]
     fold = min(math.pi, max(abs(v) for v in g))
     r_min = math.sqrt(max(s.l1 ** 2 + s.l2 ** 2 + 2 * s.l1 * s.l2 * math.cos(fold), 0.0))
@@ -245,7 +246,7 @@ def _segment_clear_of_hole(kin: RobotKinematics, P0: np.ndarray, P1: np.ndarray,
     u = 0.0 if dd == 0.0 else min(1.0, max(0.0, -float(a @ d) / dd))
     if np.linalg.norm(a + u * d) < r_min - 1e-9:
         if r_min > abs(s.l1 - s.l2) + 1e-9:
-            raise KinematicsError.joint_limit(2)
+            raise KinematicsError.joint_limit(elbow + 1)
         raise KinematicsError.out_of_range("straight line passes too close to the J1 axis")
 
 

@@ -217,6 +217,16 @@ class PartPool(Component):
     def position(self, i: int) -> np.ndarray:
         return self.data.xpos[self.body[i]].copy()
 
+    def wake_body(self, i: int) -> None:
+        """Keep body i awake: a sleeping tree wakes at the next step when it has a nonzero
+        velocity (MuJoCo's rule); an awake one about to fall asleep (a part let go at rest
+        in mid-air) gets its full awake count back, so gravity can take it."""
+        d = self.data
+        tree = self.model.body_treeid[self.body[i]]
+        if d.tree_asleep[tree] < 0:
+            d.tree_asleep[tree] = -mujoco.mjMINAWAKE
+        d.qvel[self.dadr[i] + 2] += -1e-9
+
     def wake(self, lo: np.ndarray, hi: np.ndarray) -> None:
         """Wake the live parts whose centre is in the world box lo..hi (m): a belt that starts
         must move parts that fell asleep on it."""
@@ -226,7 +236,7 @@ class PartPool(Component):
         inside = self.live[np.all((pts >= lo) & (pts <= hi), axis=1)]
         for i in inside.tolist():
             if self.state[i] == LIVE:
-                self.data.qvel[self.dadr[i] + 2] += -1e-9
+                self.wake_body(i)
 
     # ------------------------------------------------------------------ floor and bins
     def check(self, t: float) -> None:

@@ -82,6 +82,8 @@ class Gripper(Section):
     vacuum_output: Output | None = None  # output that turns the vacuum on (besides CLOSEI)
     blowoff_output: Output | None = None  # output that blows the part off
     vacuum_input: Input | None = None    # input on while the cup holds a part (vacuum sensed)
+    # fingers only
+    holding_input: Input | None = None   # input on while the jaws hold a part (a servo gripper's plate test)
 
     @model_validator(mode="after")
     def _suction_keys(self) -> "Gripper":
@@ -90,6 +92,8 @@ class Gripper(Section):
                     if getattr(self, k) is not None]
             if used:
                 raise ValueError(f"{', '.join(used)}: only for type = \"suction\"")
+        elif self.holding_input is not None:
+            raise ValueError("holding_input: only for type = \"fingers\" (a cup has vacuum_input)")
         return self
 
 
@@ -238,6 +242,51 @@ class Tray(Section):
     swap_when_full: bool = False        # an operator takes a full tray away (an empty one in its place)
 
 
+class CameraCalibration(Section):
+    file: str
+    x: Annotated[list[Finite], Field(min_length=1)]
+    y: Annotated[list[Finite], Field(min_length=1)]
+    heights: Annotated[list[Annotated[float, Field(ge=1.0, allow_inf_nan=False)]], Field(min_length=2)] = [30.0, 110.0]
+    plane_z: Finite = 0.0
+    radius: Positive = 9.0
+    rgba: Rgba = [0.0, 1.0, 0.0, 1.0]
+
+
+class CameraLight(Section):
+    pos: Vec3
+    diffuse: Annotated[list[Annotated[float, Field(ge=0, le=1)]], Field(min_length=3, max_length=3)] = [0.5, 0.5, 0.5]
+
+
+class CameraSection(Section):
+    """[[camera]] (twin/physics/camera.py, docs/vision.md)."""
+    name: str
+    resolution: Annotated[list[Annotated[int, Field(gt=0, le=8192)]], Field(min_length=2, max_length=2)] = [640, 480]
+    focal_px: Positive | None = None
+    fov_deg: Annotated[float, Field(gt=0, lt=180)] | None = None
+    pose: Pose6 = [0.0, 0.0, 1000.0, 0.0, 180.0, 0.0]
+    mount: str | None = None
+    distortion: Annotated[list[Finite], Field(min_length=5, max_length=5)] = [0.0, 0.0, 0.0, 0.0, 0.0]
+    exposure: Positive = 1.0
+    noise: NonNegative = 0.0
+    seed: int = 0
+    light: CameraLight | None = None
+    depth_range_mm: Size2 = [50.0, 5000.0]
+    calibration: CameraCalibration | None = None
+
+    @model_validator(mode="after")
+    def _focal(self) -> "CameraSection":
+        if (self.focal_px is None) == (self.fov_deg is None):
+            raise ValueError("give one of focal_px (pixels) or fov_deg (vertical field of view, deg)")
+        return self
+
+
+class Vision(Section):
+    """[vision]: twin/vision/process.py checks the processes and names the process and
+    tool of a mistake."""
+    time_s: NonNegative = 0.08
+    process: list[dict[str, Any]] = []
+
+
 class Region(Section):
     lo: Vec3
     hi: Vec3
@@ -263,6 +312,8 @@ class Scene(Section):
     sensor: list[Sensor] = []
     bin: list[Bin] = []
     tray: list[Tray] = []
+    camera: list[CameraSection] = []
+    vision: Vision | None = None
     regions: dict[str, Region] = {}
     locations: dict[str, Pose6] = {}
 
@@ -272,7 +323,8 @@ class Scene(Section):
             raise ValueError(f"robot.home: location {self.robot.home!r} is not in [locations]"
                              f" (has: {', '.join(self.locations) or 'none'})")
         kinds = {"part": self.part, "feeder": self.feeder, "conveyor": self.conveyor,
-                 "source": self.source, "sensor": self.sensor, "bin": self.bin, "tray": self.tray}
+                 "source": self.source, "sensor": self.sensor, "bin": self.bin, "tray": self.tray,
+                 "camera": self.camera}
         for kind, items in kinds.items():
             names = [c.name for c in items]
             for i, name in enumerate(names):
@@ -302,8 +354,8 @@ class Scene(Section):
                 if s.latch_encoder is not None and s.latch_encoder not in encoders:
                     raise ValueError(f"sensor[{i}].latch_encoder: no conveyor has encoder "
                                      f"{s.latch_encoder} (encoders: {encoders or 'none'})")
-        inputs = [s.input for s in self.sensor] + (
-            [self.gripper.vacuum_input] if self.gripper.vacuum_input is not None else [])
+        inputs = [s.input for s in self.sensor] + [
+            i for i in (self.gripper.vacuum_input, self.gripper.holding_input) if i is not None]
         for i, s in enumerate(self.sensor):
             if inputs.count(s.input) > 1:
                 raise ValueError(f"sensor[{i}].input: input {s.input} is wired twice")

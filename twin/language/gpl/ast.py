@@ -36,6 +36,15 @@ class Nothing(Expr):
 
 
 @dataclass
+class Evaluated(Expr):
+    """Made by the compiler, not the parser: a value already computed into a Python
+    temporary (`a(f()) += 1` evaluates f() once)."""
+
+    code: str = ""
+    type: object = None
+
+
+@dataclass
 class Me(Expr):
     pass
 
@@ -183,6 +192,7 @@ class Throw(Statement):
 @dataclass
 class ReDim(Statement):
     targets: list[Expr]
+    preserve: bool = False
 
 
 @dataclass

@@ -300,5 +300,9 @@ class GplException:
         copy._robot_num, copy._axis, copy._text = self._robot_num, self._axis, self._text
         return copy
 
-    def UpdateErrorCode(self, code) -> None:
-        self.ErrorCode = code
+    def UpdateErrorCode(self, code=None) -> None:
+        """With a code: the Exception's code becomes it.  Without one (GPL Dictionary), a
+        general code is replaced by the controller's more specific one; the twin's errors
+        are already the specific ones, so the code stays."""
+        if code is not None:
+            self.ErrorCode = code

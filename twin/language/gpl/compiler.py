@@ -29,11 +29,19 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from . import ast
-from .errors import DUPLICATE_SYMBOL, INVALID_STATEMENT
+from .errors import DUPLICATE_SYMBOL, INVALID_STATEMENT, TOO_DEEP
 from .expressions import library_byref, library_names, library_waits
 from .scope import Scope, _error, mangle
 from .statements import CompiledUnit, ProcCompiler
 from .symbols import ClassSym, DelegateSym, ModuleSym, ProcSym, PropSym, SType, VarSym
+
+
+@dataclass
+class _ConstNode:
+    """Where a Const is declared, for the error of constants that need each other."""
+
+    module: ModuleSym
+    decl: ast.Declarator
 
 
 @dataclass
@@ -81,9 +89,9 @@ class ProjectCompiler:
             self.waiting.update(cls.methods)
             self.waiting.update(cls.properties)
             self.byref_names.update(key for key, proc in cls.methods.items() if proc.byref_positions)
-        init_units, init_subs = [], []
+        init_units, init_subs = self.compile_constants(), []
         for sym in self.module_order:
-            init_units.append(self.compile_module_init(sym))
+            init_units.extend(self.compile_module_init(sym))
             init = sym.procs.get("init")
             if init is not None and init.kind == "sub" and not init.params:  # ch. 10 "Special Initialization"
                 init_subs.append(init.py)
@@ -196,19 +204,61 @@ class ProjectCompiler:
             proc.return_type = scope.resolve_type(node.return_type, node) if node.return_type else SType("double")
 
     # ------------------------------------------------------------ generation
-    def compile_module_init(self, module: ModuleSym) -> str:
-        """_Init: module variables in source order (ch. 10 "Special Initialization")."""
+    def compile_constants(self) -> list[str]:
+        """Every module and Shared class Const, each its own initialiser, run first and in
+        the order their values need each other (a Const may use another module's member,
+        whatever the order of the files in Project.gpr)."""
+        units: dict[str, tuple[str, set[str]]] = {}
+        owners = [(m, None, m.vars.values()) for m in self.module_order]
+        owners += [(c.module, c, c.fields.values()) for c in self.classes]
+        for module, cls, variables in owners:
+            for var in variables:
+                if var.const and var.kind in ("module", "shared"):
+                    gen = ProcCompiler(self, module, None, cls, f"K_{var.py}", f"{(cls or module).name}.{var.name}")
+                    gen.begin_init()
+                    gen.init_variable(var, global_store=True)
+                    gen.finish()
+                    units[var.py] = (gen.py, gen.references)
+        order: list[str] = []
+        state: dict[str, str] = {}
+
+        def visit(py: str, node) -> None:
+            if state.get(py) == "done":
+                return
+            if state.get(py) == "open":
+                raise _error(INVALID_STATEMENT, "constants defined in terms of each other", node.module.file, node.decl)
+            state[py] = "open"
+            for dep in sorted(units[py][1] & units.keys()):
+                visit(dep, node)
+            state[py] = "done"
+            order.append(units[py][0])
+
+        for module, cls, variables in owners:
+            for var in variables:
+                if var.py in units:
+                    visit(var.py, _ConstNode(module, var.decl))
+        return order
+
+    def compile_module_init(self, module: ModuleSym) -> list[str]:
+        """_Init: module variables in source order (ch. 10 "Special Initialization"), then
+        each class's Shared fields (in the class's own scope: its Consts are names there)."""
         gen = ProcCompiler(self, module, None, None, f"I_{mangle(module.name)}", f"{module.name}._Init")
         gen.begin_init()
         for var in module.vars.values():
-            gen.init_variable(var, global_store=True)
-        for cls in self.classes:
-            if cls.module is module:
-                for var in cls.fields.values():
-                    if var.kind == "shared":
-                        gen.init_variable(var, global_store=True)
+            if not var.const:
+                gen.init_variable(var, global_store=True)
         gen.finish()
-        return gen.py
+        units = [gen.py]
+        for cls in self.classes:
+            if cls.module is module and any(v.kind == "shared" and not v.const for v in cls.fields.values()):
+                cgen = ProcCompiler(self, module, None, cls, f"I_{cls.py}", f"{cls.name}._Init")
+                cgen.begin_init()
+                for var in cls.fields.values():
+                    if var.kind == "shared" and not var.const:
+                        cgen.init_variable(var, global_store=True)
+                cgen.finish()
+                units.append(cgen.py)
+        return units
 
     def compile_class_init(self, cls: ClassSym) -> None:
         """_New: the fields of a new object, then the matching constructor."""
@@ -221,7 +271,11 @@ class ProjectCompiler:
 
     def compile_procedure(self, proc: ProcSym) -> None:
         gen = ProcCompiler(self, proc.module, proc, proc.cls, proc.py, proc.qualified)
-        gen.compile_procedure()
+        try:
+            gen.compile_procedure()
+        except RecursionError:  # the compiler walks statements and expressions recursively
+            raise _error(TOO_DEEP, f"more than the compiler can nest in {proc.qualified}", proc.module.file,
+                         gen.node or proc.node, proc.qualified) from None
 
     def compile_property(self, prop: PropSym) -> None:
         node = prop.node

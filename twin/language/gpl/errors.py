@@ -32,6 +32,7 @@ UNSUPPORTED = -2010
 ILLEGAL_GOTO = -2011
 NO_START_PROCEDURE = -2012
 PROJECT_FILE_ERROR = -2013
+TOO_DEEP = -2014
 
 DIVIDE_BY_ZERO = -702
 OVERFLOW = -703
@@ -42,6 +43,7 @@ STRING_TOO_LONG = -707
 INVALID_NUMBER = -708
 ME_UNDEFINED = -709
 UNDEFINED_PROCEDURE = -710
+OUT_OF_MEMORY = -711
 STACK_OVERFLOW = -712
 INVALID_EXCEPTION = -807  # GPL Dictionary, Throw of an ErrorCode 0
 PROJECT_ERROR = -786  # "Project generated error", reserved for applications
@@ -60,6 +62,7 @@ MESSAGES = {
     ILLEGAL_GOTO: "Illegal GoTo into or out of a block",
     NO_START_PROCEDURE: "Start procedure not found or not Public",
     PROJECT_FILE_ERROR: "Invalid project file",
+    TOO_DEEP: "Statement too complex or nested too deeply",
     DIVIDE_BY_ZERO: "Divide by zero",
     OVERFLOW: "Numeric overflow",
     SUBSCRIPT_RANGE: "Array index out of range",
@@ -69,6 +72,7 @@ MESSAGES = {
     INVALID_NUMBER: "Invalid numeric value",
     ME_UNDEFINED: "Me is not defined in this procedure",
     UNDEFINED_PROCEDURE: "Undefined procedure",
+    OUT_OF_MEMORY: "Out of memory",
     STACK_OVERFLOW: "Stack overflow: too many nested procedure calls",
     INVALID_EXCEPTION: "Invalid exception",
     PROJECT_ERROR: "Project generated error",

@@ -18,8 +18,8 @@ from ...errors import ProgramError
 from . import ast
 from .builtins import FUNCTION_TYPES, FUNCTIONS, STRING_MEMBERS, STRING_SHARED
 from .errors import (
-    SYNTAX_ERROR, CONSTANT_ASSIGNMENT, INVALID_STATEMENT, PRIVATE_SYMBOL, TYPE_MISMATCH, UNDEFINED_SYMBOL, UNSUPPORTED,
-    WRONG_ARGUMENT_COUNT,
+    SYNTAX_ERROR, CONSTANT_ASSIGNMENT, INVALID_STATEMENT, PRIVATE_SYMBOL, TYPE_MISMATCH, UNDEFINED_PROCEDURE,
+    UNDEFINED_SYMBOL, UNSUPPORTED, WRONG_ARGUMENT_COUNT,
 )
 from .library import CLASSES, member as library_member
 from .parser import keywords
@@ -32,10 +32,17 @@ if TYPE_CHECKING:
 
 # Predefined constants (ch. 4, Table 4-4).
 CONSTANTS = {
-    "gpl_cr": ("'\\r'", "string"), "gpl_lf": ("'\\n'", "string"),
+    "gpl_cr": ("13", "integer"), "gpl_lf": ("10", "integer"),  # character codes: Chr(GPL_CR)
     "gpl_righty": ("1", "integer"), "gpl_lefty": ("2", "integer"), "gpl_above": ("4", "integer"),
     "gpl_below": ("8", "integer"), "gpl_flip": ("16", "integer"), "gpl_noflip": ("32", "integer"),
     "gpl_single": ("4096", "integer"),
+}
+
+# Stores of an operator's result in an Integer or a Double check its range inline (a call
+# costs more): out of range (or a NaN) is -703 *Numeric overflow* (L1156).
+_RANGE_CHECKS = {
+    "integer": "(_v if -2147483648 <= (_v := {0}) <= 2147483647 else _overflow(_v, 'Integer'))",
+    "double": "(_v if -1.7976931348623157e308 <= (_v := {0}) <= 1.7976931348623157e308 else _overflow(_v, 'Double'))",
 }
 
 # Operators done by a helper of values.py, and the type of their result (Table 6-1).
@@ -119,6 +126,8 @@ class ExpressionCompiler(Scope):
         self.try_depth = 0
         self.me_available = proc is not None and proc.instance
         self.depth = 1  # where hoisted code (ByRef write-backs) goes
+        self.references: set[str] = set()  # module and Shared variables read (Const order)
+        self.arithmetic: set[str] = set()  # codes of operator results, range-checked when stored
 
     # ------------------------------------------------------------ output
     def emit(self, depth: int, text: str) -> None:
@@ -201,9 +210,10 @@ class ExpressionCompiler(Scope):
         arg_codes = [self.expr(a)[0] for a in (args or [])]
         if ot is not None and ot.base == "ns":
             owner = ot.ref
-            if isinstance(owner, type):  # a built-in class: a shared property
-                attr = self.library_attr(owner, key, target)
-                setter = library_member(owner, "set_" + attr)
+            if isinstance(owner, type):  # a built-in class: a shared property (maybe write-only)
+                setter = library_member(owner, "set_" + key)
+                if setter is None:
+                    self.library_attr(owner, key, target)
                 if setter is None:
                     raise self.fail(INVALID_STATEMENT, f"{owner.gpl_name}.{target.name} is read-only", target)
                 self.emit(depth, f"L_{owner.gpl_name.lower()}.{setter}(rt, {', '.join(arg_codes + [code])})")
@@ -266,9 +276,13 @@ class ExpressionCompiler(Scope):
         base = target.base
         if base in CONVERT:
             if vt is not None and not vt.rank and vt.base == base:
+                if code in self.arithmetic and base in _RANGE_CHECKS:
+                    return _RANGE_CHECKS[base].format(code)  # Integer overflow / Double overflow: -703
                 return code
             if base == "double" and vt is not None and vt.is_number and vt.base != "single":
-                return code if vt.base == "double" else f"float({code})"
+                if vt.base == "double":
+                    return _RANGE_CHECKS["double"].format(code) if code in self.arithmetic else code
+                return f"float({code})"
             if vt is not None and vt.base in ("user", "lib", "delegate") and not vt.rank:
                 raise self.fail(TYPE_MISMATCH, f"{vt} assigned to a {target}")
             return f"{CONVERT[base]}({code})"
@@ -320,6 +334,9 @@ class ExpressionCompiler(Scope):
     def e_Nothing(self, e):
         return "None", SType("nothing")
 
+    def e_Evaluated(self, e: ast.Evaluated):
+        return e.code, e.type
+
     def e_Me(self, e):
         if not self.me_available:
             return "rt.no_me()", None
@@ -353,6 +370,8 @@ class ExpressionCompiler(Scope):
         raise self.fail(TYPE_MISMATCH, f"{e.name} is not a value", e)
 
     def var_code(self, var: VarSym) -> str:
+        if var.kind in ("module", "shared"):
+            self.references.add(var.py)
         if var.kind == "field":
             return f"{self.me_code()}.{var.py}"
         if var.byref:
@@ -416,6 +435,8 @@ class ExpressionCompiler(Scope):
         if isinstance(target, ast.Member):
             ocode, ot = self.expr_or_ns(target.obj)
             if ot is not None and ot.base == "ns":
+                if isinstance(ot.ref, (ModuleSym, ClassSym)) and ot.ref.member(target.key) is None:
+                    raise self.fail(UNDEFINED_PROCEDURE, f"{ot.ref.name}.{target.name}", target)
                 proc = self.member_of_namespace(ot.ref, target.key, target)
             elif ot is not None and ot.base == "user":
                 proc = self.class_member(ot.ref, target.key, target)
@@ -424,6 +445,8 @@ class ExpressionCompiler(Scope):
                 raise self.fail(TYPE_MISMATCH, "AddressOf needs a procedure", e)
         elif isinstance(target, ast.Name):
             proc = self.lookup_value(target.key, target)
+            if proc is None:  # what a real controller reports for a procedure it does not have
+                raise self.fail(UNDEFINED_PROCEDURE, target.name, target)
             if isinstance(proc, ProcSym) and proc.instance and self.me_available:
                 me = "me"
         else:
@@ -450,16 +473,22 @@ class ExpressionCompiler(Scope):
             raise self.fail(TYPE_MISMATCH, f"{proc.name} does not match Delegate {dsym.name}", node)
 
     # ---- operators
+    def unchecked(self, code: str) -> str:
+        """An operator's result, which may be out of its type's range: checked when stored."""
+        self.arithmetic.add(code)
+        return code
+
     def e_Unary(self, e: ast.Unary):
         code, t = self.expr(e.operand)
         if e.op == "-":
             if t is not None and t.is_number:
-                return f"(-{code})", t
+                return self.unchecked(f"(-{code})"), t
             return f"_neg({code})", SType("double")
+        # Not is logical on any value (Table 6-1): False (0) -> True (-1), True (<> 0) -> False
         if t is not None and t.is_bool:
             return f"(not {code})", t
-        if t is not None and t.is_integral:
-            return f"(~{code})", t
+        if t is not None and t.is_number:
+            return f"(-1 if {code} == 0 else 0)", SType("integer")
         return f"_not({code})", None
 
     def e_Binary(self, e: ast.Binary):
@@ -489,18 +518,20 @@ class ExpressionCompiler(Scope):
         result = SType("integer") if ints else SType("double")
         if op == "+":
             if at is not None and bt is not None and at.is_string and bt.is_string:
-                return f"({a} + {b})", SType("string")
-            return (f"({a} + {b})", result) if nums else (f"_add({a}, {b})", None)
+                return self.unchecked(f"_cat({a}, {b})"), SType("string")
+            return self.unchecked(f"({a} + {b})") if nums else self.unchecked(f"_add({a}, {b})"), \
+                result if nums else None
         if op in ("-", "*"):
-            return (f"({a} {op} {b})", result) if nums else (f"(_num({a}) {op} _num({b}))", SType("double"))
+            return self.unchecked(f"({a} {op} {b})" if nums else f"(_num({a}) {op} _num({b}))"), \
+                result if nums else SType("double")
         if op in _OPERATOR_HELPERS:
             helper, rtype = _OPERATOR_HELPERS[op]
-            return f"{helper}({a}, {b})", SType(rtype)
+            return self.unchecked(f"{helper}({a}, {b})"), SType(rtype)
         if op == "mod":
             return f"_mod({a}, {b})", result
         if op == "&":
             if at is not None and bt is not None and at.is_string and bt.is_string:
-                return f"({a} + {b})", SType("string")
+                return f"_cat({a}, {b})", SType("string")
             return f"_concat({a}, {b})", SType("string")
         if op in ("=", "<>", "<", ">", "<=", ">="):
             strings = at is not None and bt is not None and at.is_string and bt.is_string
@@ -609,6 +640,9 @@ class ExpressionCompiler(Scope):
                     return f"_GlobalRef(globals(), {sym.py!r})"
                 if sym.kind == "field":
                     return f"_AttrRef({self.me_code()}, {sym.py!r})"
+                for passed, cell, _ in write_back:
+                    if isinstance(passed, ast.Name) and passed.key == arg.key:
+                        return cell  # f(x, x): both parameters are the one variable
                 cell = self.fresh("ref")
                 self.emit(self.depth, f"{cell} = _Ref({sym.py})")
                 write_back.append((arg, cell, t))
@@ -636,9 +670,11 @@ class ExpressionCompiler(Scope):
         if not write_back:
             return call
         temp = self.fresh("r")
-        self.emit(self.depth, f"{temp} = {call}")
+        self.emit(self.depth, "try:")
+        self.emit(self.depth + 1, f"{temp} = {call}")
+        self.emit(self.depth, "finally:  # the callee's writes are the caller's even when it throws")
         for arg, cell, t in write_back:
-            self.store(arg, f"{cell}.value", t, self.depth)
+            self.store(arg, f"{cell}.value", t, self.depth + 1)
         return temp
 
     def call_member(self, ocode: str, ot: SType | None, func: ast.Member, args, e, statement: bool,
@@ -659,6 +695,9 @@ class ExpressionCompiler(Scope):
                 return self.call_proc(sym, None, args, e, statement)
             if isinstance(sym, VarSym):
                 t = sym.type
+                self.references.add(sym.py)
+                if t.base == "delegate" and not t.rank and (args or statement):
+                    return self.invoke_delegate(sym.py, t.ref, args, e)  # Module.fallback(x)
                 if args:
                     return f"{sym.py}[{self.indices(args)}]", t.element
                 return sym.py, t
@@ -677,6 +716,10 @@ class ExpressionCompiler(Scope):
             sym = self.class_member(ot.ref, key, func)
             if isinstance(sym, VarSym):
                 where = sym.py if sym.kind == "shared" else f"{ocode}.{sym.py}"
+                if sym.kind == "shared":
+                    self.references.add(sym.py)
+                if sym.type.base == "delegate" and not sym.type.rank and (args or statement):
+                    return self.invoke_delegate(where, sym.type.ref, args, e)  # obj.handler(x)
                 if args:
                     if sym.type.is_array:
                         return f"{where}[{self.indices(args)}]", sym.type.element

@@ -8,17 +8,20 @@ ProgramError with file, line, column, the offending text and GPL's code.
 
 from __future__ import annotations
 
+import os
 import re
+import stat
 from functools import lru_cache
 from importlib.resources import files
 from pathlib import Path
 
-from lark import Lark, Token, Transformer, v_args
+from lark import Lark, Token, v_args
+from lark.visitors import Transformer_NonRecursive
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from ...errors import ProgramError
 from . import ast
-from .errors import SYNTAX_ERROR, message
+from .errors import SYNTAX_ERROR, TOO_DEEP, message
 
 
 @lru_cache(maxsize=1)
@@ -43,17 +46,30 @@ def _code_part(line: str) -> str:
     return line
 
 
-def prepare(text: str) -> str:
+# `Add(1,_` : a line continuation written without the blank before the underscore, after
+# a character that cannot end a name (Precise's and Brooks' code does this).
+_TIGHT_CONTINUATION = re.compile(r"(?<=[^\w\s])_$")
+
+
+MAX_LINE_LENGTH = 16384  # characters in one source line (docs/gpl.md); the parser's time grows with it
+
+
+def prepare(text: str, file: str = "<string>") -> str:
     """Blank comments, `#` lines and REM lines (keeping line numbers); mark continuations."""
     text = text.removeprefix("\ufeff").removeprefix("\xef\xbb\xbf")  # a byte-order mark from a Windows editor
     lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
     out = []
-    for raw in lines:
+    for number, raw in enumerate(lines, start=1):
+        if len(raw) > MAX_LINE_LENGTH:
+            raise ProgramError(f"{message(TOO_DEEP)}: a line of {len(raw):,} characters (at most "
+                               f"{MAX_LINE_LENGTH:,})", TOO_DEEP, file=file, line=number, column=MAX_LINE_LENGTH + 1,
+                               text=raw[:80] + "...")
         stripped = raw.lstrip()
         if stripped.startswith("#") or re.match(r"rem(\s|$)", stripped, re.I):
             out.append("")
             continue
         code = _code_part(raw).rstrip()
+        code = _TIGHT_CONTINUATION.sub(" _", code)
         if code and not code.endswith(" _") and _OPEN_END.search(code) and not code.lstrip().endswith(":"):
             code += " _"
         out.append(code)
@@ -69,7 +85,7 @@ def _body(tree_or_list) -> list[ast.Statement]:
 
 
 @v_args(meta=True)
-class _ToAst(Transformer):
+class _ToAst(Transformer_NonRecursive):  # no recursion: a program nested 10,000 deep still parses
     # ---- literals and names
     def number(self, meta, c):
         text = str(c[0])
@@ -227,7 +243,8 @@ class _ToAst(Transformer):
         return ast.Throw(value=c[0], **_pos(meta))
 
     def redim(self, meta, c):
-        return ast.ReDim(targets=list(c), **_pos(meta))
+        preserve, *targets = c
+        return ast.ReDim(targets=targets, preserve=preserve is not None, **_pos(meta))
 
     def if_line(self, meta, c):
         cond, then, orelse = c
@@ -455,7 +472,7 @@ def parse(text: str, file: str = "<string>") -> ast.SourceFile:
     """Parse one .gpl or .gpo file.  Members outside any Module go to an implicit module."""
     source = ast.SourceFile(file)
     try:
-        items = _ToAst().transform(_parser().parse(prepare(text)))
+        items = _ToAst().transform(_parser().parse(prepare(text, file)))
     except UnexpectedInput as err:
         raise _syntax_error(err, text.replace("\r\n", "\n").split("\n"), file) from None
     loose = []
@@ -474,6 +491,8 @@ def parse(text: str, file: str = "<string>") -> ast.SourceFile:
 def parse_file(path: str | Path) -> ast.SourceFile:
     path = Path(path)
     try:
+        if not stat.S_ISREG(os.stat(path).st_mode):  # a FIFO or a device would hang or never end
+            raise ProgramError(f"Cannot open file {path}: not a regular file", file=str(path))
         text = path.read_text(encoding="latin-1")
     except OSError:
         raise ProgramError(f"Cannot open file {path}", file=str(path)) from None

@@ -19,9 +19,11 @@ the folder is loaded, in name order.  Other keys are ignored.
 
 from __future__ import annotations
 
+import os
 import re
+import stat
 from dataclasses import dataclass
-from pathlib import Path
+from pathlib import Path, PureWindowsPath
 
 from ...errors import ProgramError
 from .errors import PROJECT_FILE_ERROR, message
@@ -41,6 +43,9 @@ def read_project(folder: Path) -> ProjectFile:
     if gpr is None:
         raise ProgramError(f"{message(PROJECT_FILE_ERROR)}: no Project.gpr in {folder}", PROJECT_FILE_ERROR,
                            file=str(folder))
+    if not regular_file(gpr):
+        raise ProgramError(f"{message(PROJECT_FILE_ERROR)}: {gpr.name} is not a regular file", PROJECT_FILE_ERROR,
+                           file=str(gpr))
     name, start, sources = folder.name, None, []
     text = gpr.read_text(encoding="latin-1").removeprefix("\xef\xbb\xbf")  # byte-order mark
     for number, raw in enumerate(text.splitlines(), start=1):
@@ -57,20 +62,55 @@ def read_project(folder: Path) -> ProjectFile:
         elif key == "projectstart":
             start = value
         elif key == "projectsource":
-            path = _find(folder, value)
-            if path is None:
-                raise ProgramError(f"{message(PROJECT_FILE_ERROR)}: no file {value} in {folder}",
-                                   PROJECT_FILE_ERROR, file=str(gpr), line=number, column=1, text=raw)
-            sources.append(path)
+            sources.append(_source(folder, value, gpr, number, raw))
     if not sources:
-        files = sorted(p for p in folder.iterdir() if p.suffix.lower() in (".gpo", ".gpl"))
+        files = sorted(p for p in folder.iterdir() if p.suffix.lower() in (".gpo", ".gpl") and _inside(folder, p))
         sources = [p for p in files if p.suffix.lower() == ".gpo"] + [p for p in files if p.suffix.lower() == ".gpl"]
     return ProjectFile(name, start, sources)
 
 
-def _find(folder: Path, name: str) -> Path | None:
+def _source(folder: Path, value: str, gpr: Path, number: int, raw: str) -> Path:
+    """A ProjectSource file: inside the project folder (no absolute path, no `..`, no
+    link out of it) and a regular file (a FIFO or a device would hang or be endless).
+    The error quotes the Project.gpr line, never the file's content."""
+    def refuse(why: str) -> ProgramError:
+        return ProgramError(f"{message(PROJECT_FILE_ERROR)}: ProjectSource {value}: {why}", PROJECT_FILE_ERROR,
+                            file=str(gpr), line=number, column=1, text=raw)
+
+    relative = PureWindowsPath(value) if "\\" in value else Path(value)
+    if relative.is_absolute() or relative.anchor or ".." in relative.parts or not value:
+        raise refuse("must be a file of the project folder (no absolute path, no ..)")
+    path = _find(folder, Path(*relative.parts))
+    if path is None:
+        raise refuse(f"no such file in {folder}")
+    if not _inside(folder, path):
+        raise refuse("is a link out of the project folder")
+    if not regular_file(path):
+        raise refuse("not a regular file")
+    return path
+
+
+def regular_file(path: Path) -> bool:
+    """Whether path is a regular file (not a FIFO, device, socket or folder)."""
+    try:
+        return stat.S_ISREG(os.stat(path).st_mode)
+    except OSError:
+        return False
+
+
+def _inside(folder: Path, path: Path) -> bool:
+    try:
+        return path.resolve().is_relative_to(folder.resolve())
+    except (OSError, RuntimeError):  # a symlink loop
+        return False
+
+
+def _find(folder: Path, name: Path) -> Path | None:
     """A listed file; names match case-insensitively (the files may come from Windows)."""
     exact = folder / name
     if exact.exists():
         return exact
-    return next((p for p in folder.iterdir() if p.name.lower() == name.lower()), None)
+    parent = folder / name.parent
+    if not parent.is_dir():
+        return None
+    return next((p for p in parent.iterdir() if p.name.lower() == name.name.lower()), None)

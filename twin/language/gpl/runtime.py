@@ -24,10 +24,11 @@ from . import builtins, values
 from .compiler import CompiledProject, ProjectCompiler
 from .expressions import library_arity, library_byref
 from .errors import (
-    DIVIDE_BY_ZERO, INVALID_ARGUMENT, INVALID_STATEMENT, ME_UNDEFINED, NO_START_PROCEDURE, NULL_OBJECT,
-    OVERFLOW, STACK_OVERFLOW, TYPE_MISMATCH, UNDEFINED_PROCEDURE, UNDEFINED_SYMBOL, WRONG_ARGUMENT_COUNT,
+    DIVIDE_BY_ZERO, INVALID_ARGUMENT, INVALID_NUMBER, INVALID_STATEMENT, ME_UNDEFINED, NO_START_PROCEDURE,
+    NULL_OBJECT, OUT_OF_MEMORY, OVERFLOW, TOO_DEEP, STACK_OVERFLOW, TYPE_MISMATCH, UNDEFINED_PROCEDURE, UNDEFINED_SYMBOL, WRONG_ARGUMENT_COUNT,
     GplError, fail, message,
 )
+from . import library as library_package
 from .library import CLASSES, Ref, member as library_member
 from .parser import parse, parse_file
 from .project import read_project
@@ -295,10 +296,10 @@ def _setindex(obj, args: tuple, value) -> None:
     obj[tuple(values._ix(a) for a in args) if len(args) > 1 else values._ix(args[0])] = value
 
 
-def _redim(array, dims: tuple, default):
+def _redim(array, dims: tuple, default, preserve: bool):
     if array is None:
         return values.GplArray(dims, default)
-    array.redim(dims)
+    array.redim(dims, preserve)
     return array
 
 
@@ -325,6 +326,11 @@ def as_gpl_error(err: BaseException) -> GplError | None:
         return fail(OVERFLOW)
     if isinstance(err, RecursionError):
         return fail(STACK_OVERFLOW)
+    if isinstance(err, MemoryError):
+        return fail(OUT_OF_MEMORY)
+    member = _library_member_of(err)
+    if member is not None:
+        return _argument_error(err, member)
     if not _raised_in_program(err):
         return None  # not the program's fault: a bug in twin, let it show
     if isinstance(err, (AttributeError, TypeError)) and "NoneType" in str(err):
@@ -332,6 +338,42 @@ def as_gpl_error(err: BaseException) -> GplError | None:
     if isinstance(err, (TypeError, ValueError)):
         return fail(TYPE_MISMATCH, str(err))
     return None
+
+
+_LIBRARY = str(Path(library_package.__file__).parent)
+_ARGUMENT_ERRORS = (TypeError, ValueError, AttributeError, IndexError, KeyError)
+
+
+def _library_member_of(err: BaseException) -> str | None:
+    """The built-in member whose own code raised `err` while taking its arguments apart
+    (`int("abc")`, `float(None)`, `loc.total()` of a Profile...), or None.  Only an
+    argument error raised right in a member of twin/language/gpl/library counts: an error
+    from deeper down (numpy, the controller) stays a twin bug."""
+    if not isinstance(err, _ARGUMENT_ERRORS):
+        return None
+    if isinstance(err, AttributeError) and not _is_gpl_value(getattr(err, "obj", None)):
+        return None  # an attribute missing on the twin's own objects (its controller...)
+    frames = traceback.extract_tb(err.__traceback__)
+    if not frames or not frames[-1].filename.startswith(_LIBRARY):
+        return None
+    return frames[-1].name
+
+
+def _is_gpl_value(value) -> bool:
+    """A value a GPL program can hold: a number, String, Nothing, array or object."""
+    return value is None or isinstance(value, (int, float, str, values.GplArray, GplObject)) or \
+        hasattr(type(value), "gpl_name")
+
+
+def _argument_error(err: BaseException, member: str) -> GplError:
+    """An argument a built-in member cannot use, as the GPL error: a String that is not a
+    number -708, Nothing -705, any other value of the wrong kind -706."""
+    text = str(err)
+    if isinstance(err, ValueError) and ("could not convert string" in text or "invalid literal" in text):
+        return fail(INVALID_NUMBER, f"a String that is not a number given to {member}")
+    if "NoneType" in text:
+        return fail(NULL_OBJECT, f"Nothing given to {member}")
+    return fail(INVALID_ARGUMENT, f"a value of the wrong kind given to {member}")
 
 
 def _raised_in_program(err: BaseException) -> bool:
@@ -424,10 +466,26 @@ class GplSystem:
             for var in module.vars.values():
                 ns[var.py] = None
         for index, unit in enumerate(compiled.units):
-            code = compile(unit.source, f"<gpl:{index}>", "exec")
-            exec(code, ns)
+            exec(self._python_code(unit, index), ns)
         for cls in compiled.classes:
             ns[cls.py].gpl_members = self._class_members(cls)
+
+    def _python_code(self, unit, index: int):
+        """The unit's generated Python, compiled.  Python's own limits (20 nested loops or
+        Try blocks, 100 indentation levels, 200 nested parentheses) are GPL -2014 errors
+        at the statement that goes beyond them."""
+        try:
+            return compile(unit.source, f"<gpl:{index}>", "exec")
+        except (SyntaxError, RecursionError, MemoryError) as err:
+            generated = getattr(err, "lineno", None) or 0
+            lines = [n for n in unit.line_map if n <= generated] or sorted(unit.line_map)[:1]
+            located = ProgramError(f"{message(TOO_DEEP)}: more than the controller can nest in {unit.name}",
+                                   TOO_DEEP, file=unit.file, program=unit.name)
+            if lines:
+                line, column = unit.line_map[max(lines)]
+                text = self.sources.get(unit.file, [])
+                located.located(line=line, column=column, text=text[line - 1] if 0 < line <= len(text) else None)
+            raise located from None
 
     def _class_members(self, cls) -> dict:
         """What run-time member lookup (_callm/_setm) needs about a user class."""

@@ -14,13 +14,17 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from . import ast
-from .errors import DUPLICATE_SYMBOL, ILLEGAL_GOTO, INVALID_STATEMENT, TYPE_MISMATCH, UNDEFINED_SYMBOL, UNSUPPORTED
+from .errors import (
+    DUPLICATE_SYMBOL, ILLEGAL_GOTO, INVALID_STATEMENT, TOO_DEEP, TYPE_MISMATCH, UNDEFINED_SYMBOL, UNSUPPORTED,
+)
 from .expressions import ExpressionCompiler
 from .library import CLASSES
 from .scope import mangle
 from .symbols import SType, VarSym
 from .values import CONVERT, DEFAULTS
 
+TRY_BODY, FINALLY = "try", "finally"  # _Block.boundary of a Try's statements and of its Finally
+MAX_BLOCK_DEPTH = 64  # nested blocks in a procedure (docs/gpl.md); Python's own limits may stop sooner
 SLICE_ITERATIONS = 1024  # loop iterations between time slices, as for V+ tasks
 
 
@@ -41,7 +45,7 @@ class _Block:
 
     ident: int
     labels: dict[str, int]  # label -> segment
-    boundary: bool = False  # a Try/Catch/Finally edge: GoTo may not cross it
+    boundary: object = False  # TRY_BODY (GoTo out allowed); True (a Catch) or FINALLY: no GoTo out
 
 
 @dataclass
@@ -73,15 +77,16 @@ def _contains(body: list, kinds: tuple) -> bool:
 
 
 def _nested_bodies(s) -> list[list]:
+    """The statement lists inside s, in source order."""
     out = []
-    for attr in ("body", "orelse", "catch_body", "finally_body", "default"):
-        inner = getattr(s, attr, None)
-        if isinstance(inner, list):
-            out.append(inner)
     if isinstance(s, ast.If):
         out.extend(b for _, b in s.branches)
     if isinstance(s, ast.Select):
         out.extend(b for _, b in s.cases)
+    for attr in ("body", "catch_body", "finally_body", "orelse", "default"):
+        inner = getattr(s, attr, None)
+        if isinstance(inner, list):
+            out.append(inner)
     return out
 
 
@@ -162,6 +167,7 @@ class ProcCompiler(ExpressionCompiler):
                 raise self.fail(DUPLICATE_SYMBOL, p.name, node)
             self.locals[p.key] = var
             params.append(var.py)
+        self.check_depth(node.body)
         self.collect_locals(node.body)
         self.node = node
         self.emit(0, f"def {self.py}({', '.join(params)}):")
@@ -180,17 +186,26 @@ class ProcCompiler(ExpressionCompiler):
         self.emit(1, self.return_code(None))
         self.finish()
 
+    def check_depth(self, body: list[ast.Statement]) -> None:
+        """Blocks nested more than MAX_BLOCK_DEPTH deep are -2014 at the first statement
+        that deep (found without recursion; the compiler itself recurses per block)."""
+        pending = [(body, 1)]
+        while pending:
+            statements, depth = pending.pop()
+            for s in statements:
+                inner = _nested_bodies(s)
+                if inner and depth >= MAX_BLOCK_DEPTH:
+                    raise self.fail(TOO_DEEP, f"blocks nested more than {MAX_BLOCK_DEPTH} deep", s)
+                pending.extend((b, depth + 1) for b in inner)
+
     def collect_locals(self, body: list[ast.Statement]) -> None:
-        """Declarations are allowed at the outermost level only (ch. 4) and their
-        scope is the whole procedure."""
-        for s in body:
-            if isinstance(s, ast.Declare):
-                self.declare_locals(s)
+        """Every Dim of the procedure, also one inside a block (If, For, Select... as
+        Precise's own code writes them): its scope is the whole procedure, and the
+        same name declared in two blocks with the same type is one variable."""
         top = {id(s) for s in body}
         for s in _walk(body):
-            if isinstance(s, ast.Declare) and id(s) not in top:
-                raise self.fail(INVALID_STATEMENT, "variables can only be declared in the outermost "
-                                "level of a procedure (ch. 4)", s)
+            if isinstance(s, ast.Declare):
+                self.declare_locals(s, nested=id(s) not in top)
             if isinstance(s, ast.Try) and s.catch_type is not None:
                 self.declare_implicit(s.catch_var, s.catch_type, s)
             if isinstance(s, ast.For) and s.var_type is not None and isinstance(s.var, ast.Name):
@@ -201,11 +216,14 @@ class ProcCompiler(ExpressionCompiler):
         if name.lower() not in self.locals:
             self.locals[name.lower()] = VarSym(name, self.resolve_type(type_ref, node), "local", f"l_{name.lower()}")
 
-    def declare_locals(self, s: ast.Declare) -> None:
+    def declare_locals(self, s: ast.Declare, nested: bool = False) -> None:
         for d in s.items:
-            if d.key in self.locals:
-                raise self.fail(DUPLICATE_SYMBOL, d.name, d)
             t = self.declarator_type(d)
+            known = self.locals.get(d.key)
+            if known is not None:
+                if nested and known.kind == "local" and known.type == t and known.decl is not None:
+                    continue  # the same block variable declared again in another block
+                raise self.fail(DUPLICATE_SYMBOL, d.name, d)
             if "static" in s.modifiers:
                 py = f"T_{mangle(self.py, d.key)}"
                 self.project.statics[py] = None if t.rank else self.default(t)
@@ -290,13 +308,41 @@ class ProcCompiler(ExpressionCompiler):
 
     def s_Assign(self, s: ast.Assign, depth: int) -> None:
         value = s.value
+        target = s.target
         if s.op != "=":
             op = {"^=": "^", "*=": "*", "/=": "/", "\\=": "\\", "+=": "+", "-=": "-", "<<=": "<<",
                   ">>=": ">>", "&=": "&"}[s.op]
-            value = ast.Binary(op, s.target, s.value)
+            target = self.evaluated_once(target, depth)
+            value = ast.Binary(op, target, s.value)
             value.line, value.column = s.line, s.column
         code, vt = self.expr(value)
-        self.store(s.target, code, vt, depth)
+        self.store(target, code, vt, depth)
+
+    def evaluated_once(self, target: ast.Expr, depth: int) -> ast.Expr:
+        """The target of a compound assignment with its indices and object computed once
+        (`a(f()) += 1` calls f once, as VB.NET does)."""
+        if isinstance(target, ast.Call):
+            func = self.evaluated_once(target.func, depth) if isinstance(target.func, ast.Member) else target.func
+            args = [self.temporary(a, depth) for a in target.args]
+            return ast.Call(func, args, target.line, target.column)
+        if isinstance(target, ast.Member) and not isinstance(target.obj, (ast.Name, ast.Me)):
+            code, t = self.expr_or_ns(target.obj, target.key)
+            if t is not None and t.base == "ns":
+                return target
+            return ast.Member(ast.Evaluated(code=self.hold(code, depth), type=t),
+                              target.name, target.line, target.column)
+        return target
+
+    def temporary(self, e: ast.Expr, depth: int) -> ast.Expr:
+        if isinstance(e, (ast.Literal, ast.Name, ast.Evaluated)):
+            return e
+        code, t = self.expr(e)
+        return ast.Evaluated(code=self.hold(code, depth), type=t)
+
+    def hold(self, code: str, depth: int) -> str:
+        temp = self.fresh("once")
+        self.emit(depth, f"{temp} = {code}")
+        return temp
 
     def s_CallStatement(self, s: ast.CallStatement, depth: int) -> None:
         e = s.expr
@@ -510,7 +556,7 @@ class ProcCompiler(ExpressionCompiler):
         self.try_depth += 1
         if s.catch_body is not None:
             self.emit(inner, "try:")
-            self.block(s.body, inner + 1, dispatch_var=pc, boundary=True)
+            self.block(s.body, inner + 1, dispatch_var=pc, boundary=TRY_BODY)
             self.node = s
             self.emit(inner, "except Exception as _e:  # not the _Control jumps (BaseException)")
             if catch_var is not None:
@@ -534,7 +580,7 @@ class ProcCompiler(ExpressionCompiler):
                 self.block(s.catch_body, inner + 1)
                 self.blocks.pop()
         else:
-            self.block(s.body, inner, boundary=True)
+            self.block(s.body, inner, boundary=TRY_BODY)
             if retry:
                 self.emit(inner, "break")
         self.try_depth -= 1
@@ -546,7 +592,7 @@ class ProcCompiler(ExpressionCompiler):
             self.emit(depth + 1, "raise")
             self.emit(depth, "finally:")
             self.emit(depth + 1, f"if {flag} is None:")
-            self.blocks.append(_Block(-1, {}, True))
+            self.blocks.append(_Block(-1, {}, FINALLY))
             self.block(s.finally_body, depth + 2)
             self.blocks.pop()
 
@@ -567,8 +613,8 @@ class ProcCompiler(ExpressionCompiler):
             if s.label in block.labels:
                 self.emit(depth, f"raise _Jump({block.ident}, {block.labels[s.label]})")
                 return
-            if block.boundary:
-                break
+            if block.boundary and block.boundary is not TRY_BODY:
+                break  # out of the try_statements is allowed (the Finally runs), not out of a Catch or Finally
         if self.label_exists(s.label):
             raise self.fail(ILLEGAL_GOTO, f"GoTo {s.label}", s)
         raise self.fail(UNDEFINED_SYMBOL, f"label {s.label}", s)
@@ -647,4 +693,4 @@ class ProcCompiler(ExpressionCompiler):
             default = self.default(t.element) if t is not None else None
             if t is not None and len(target.args) != t.rank:
                 raise self.fail(INVALID_STATEMENT, "ReDim cannot change the rank of an array", s)
-            self.store(target.func, f"_redim({code}, ({dims},), {default!r})", t, depth)
+            self.store(target.func, f"_redim({code}, ({dims},), {default!r}, {s.preserve})", t, depth)

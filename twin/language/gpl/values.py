@@ -11,11 +11,18 @@ rounding (ch. 8: 7.875 stored in an Integer is 8).
 
 from __future__ import annotations
 
+import itertools
 import math
 import struct
 
-from .errors import DIVIDE_BY_ZERO, INVALID_NUMBER, OVERFLOW, SUBSCRIPT_RANGE, TYPE_MISMATCH, fail
+from .errors import DIVIDE_BY_ZERO, INVALID_NUMBER, OUT_OF_MEMORY, OVERFLOW, SUBSCRIPT_RANGE, TYPE_MISMATCH, fail
 
+# The controller's memory, as limits (docs/gpl.md): an array has at most this many
+# elements, a String at most this many characters; beyond, -711 *Out of memory*.
+MAX_ARRAY_ELEMENTS = 1 << 22
+MAX_STRING_LENGTH = 1 << 24
+DOUBLE_MAX = 1.7976931348623157e308
+SINGLE_MAX = 3.4028234663852886e38
 INTEGER_RANGES = {"integer": (-(2**31), 2**31 - 1), "short": (-32768, 32767), "byte": (0, 255)}
 
 
@@ -31,6 +38,8 @@ class GplArray:
             if d < -1:
                 raise fail(SUBSCRIPT_RANGE, f"upper bound {d}")
             size *= d + 1
+        if size > MAX_ARRAY_ELEMENTS:
+            raise fail(OUT_OF_MEMORY, f"an array of {size:,} elements (at most {MAX_ARRAY_ELEMENTS:,})")
         self.data = [default] * size
         self.element = default
 
@@ -75,11 +84,15 @@ class GplArray:
             raise fail(SUBSCRIPT_RANGE, f"dimension {d}")
         return self.dims[d]
 
-    def redim(self, dims: tuple[int, ...]) -> None:
-        """ReDim: new sizes, same rank, elements reset (there is no Preserve)."""
+    def redim(self, dims: tuple[int, ...], preserve: bool = False) -> None:
+        """ReDim: new sizes, same rank; the elements are reset, or with Preserve the ones
+        whose indices are inside both the old and the new bounds are kept."""
         if len(dims) != len(self.dims):
             raise fail(SUBSCRIPT_RANGE, "ReDim cannot change the rank of an array")
         fresh = GplArray(dims, self.element)
+        if preserve:
+            for index in itertools.product(*(range(min(a, b) + 1) for a, b in zip(self.dims, dims))):
+                fresh[index if len(index) > 1 else index[0]] = self[index if len(index) > 1 else index[0]]
         self.dims, self.data = fresh.dims, fresh.data
 
     @staticmethod
@@ -155,15 +168,29 @@ def _cbyte(v) -> int:
 
 
 def _cdbl(v) -> float:
-    if v.__class__ is float:
+    if v.__class__ is float and -DOUBLE_MAX <= v <= DOUBLE_MAX:
         return v
-    return float(_num(v))
+    v = float(_num(v))
+    if not -DOUBLE_MAX <= v <= DOUBLE_MAX:
+        raise fail(OVERFLOW, f"{v} as Double")
+    return v
+
+
+def _overflow(v, kind: str):
+    """A stored operator result out of its type's range (expressions.py _RANGE_CHECKS)."""
+    raise fail(OVERFLOW, f"{format_number(v)} as {kind}")
+
+
+def format_number(v) -> str:
+    return str(v) if v.__class__ is int else {math.inf: "+infinity", -math.inf: "-infinity"}.get(v, repr(v))
 
 
 def _csng(v) -> Single:
     if v.__class__ is Single:
         return v
     v = _cdbl(v)
+    if abs(v) > SINGLE_MAX:
+        raise fail(OVERFLOW, f"{v} as Single")
     try:
         return Single(struct.unpack("f", struct.pack("f", v))[0])
     except OverflowError:
@@ -197,6 +224,8 @@ def format_value(v) -> str:
     if t is int:
         return str(v)
     if t is float or t is Single:
+        if not -DOUBLE_MAX <= v <= DOUBLE_MAX:
+            raise fail(OVERFLOW, f"{format_number(v)} as a Double")
         digits = 7 if t is Single else 15  # a Single shows 0.1, not 0.100000001490116
         if v.is_integer() and abs(v) < 10 ** digits:
             return str(int(v))
@@ -230,12 +259,19 @@ def _ix(v) -> int:
 def _add(a, b):
     """`+`: concatenation when both are Strings, else numeric (ch. 7: 2.34 + "1.01" = 3.35)."""
     if a.__class__ is str and b.__class__ is str:
-        return a + b
+        return _cat(a, b)
     return _num(a) + _num(b)
 
 
 def _concat(a, b) -> str:
-    return _cstr(a) + _cstr(b)
+    return _cat(_cstr(a), _cstr(b))
+
+
+def _cat(a: str, b: str) -> str:
+    """Two Strings joined, within the controller's memory (-711 beyond MAX_STRING_LENGTH)."""
+    if len(a) + len(b) > MAX_STRING_LENGTH:
+        raise fail(OUT_OF_MEMORY, f"a String of {len(a) + len(b):,} characters (at most {MAX_STRING_LENGTH:,})")
+    return a + b
 
 
 def _div(a, b) -> float:
@@ -313,9 +349,11 @@ def _xor(a, b):
 
 
 def _not(a):
+    """Not: False (0) -> True (-1), any True (<> 0) -> False (0), Table 6-1 (a Boolean
+    gives a Boolean, a number the Integer -1 or 0)."""
     if a.__class__ is bool:
         return not a
-    return ~_bits(_num(a))
+    return -1 if _num(a) == 0 else 0
 
 
 def _truth(v) -> bool:

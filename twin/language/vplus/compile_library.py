@@ -20,7 +20,8 @@ import dataclasses
 
 from . import ast
 from . import messages as msg
-from .keywords import INSTRUCTIONS, NAME_ARGUMENTS, WRITES_FIRST_ARGUMENT, argument_check, arity
+from .keywords import (FUNCTIONS, INSTRUCTIONS, NAME_ARGUMENTS, STRING_FUNCTIONS, WRITES_FIRST_ARGUMENT,
+                       argument_check, arity)
 
 FORMAT_ARGUMENTS = {"$ENCODE"}  # arguments are TYPE items: expressions and /I0, /F8.3 ...
 ARRAY_ARGUMENTS = {"$UNPACK", "SOLVE.FLAGS"}  # the first argument a[i] (a[]) is passed as (array, index)
@@ -172,7 +173,9 @@ class LibraryStatements:
             first = e.args[0] if e.args else None
             if not isinstance(first, ast.Var) or first.indices is None or (e.name == "$UNPACK" and not first.indices):
                 raise self.error(self.current, msg.INVALID_ARGUMENT, f"{e.name} needs an array element")
-            rest = "".join(", " + ("None" if a is None else self.expr(a)) for a in e.args[1:])
+            function = (STRING_FUNCTIONS if e.name.startswith("$") else FUNCTIONS)[e.name]
+            rest = "".join(", " + self.checked(a, argument_check(function, i), e.name)
+                           for i, a in enumerate(e.args[1:], start=1))
             return f"F[{e.name!r}](rt, {self.array_ref(first)}{rest})"
         if e.name in NAME_ARGUMENTS:
             # A bare name is the name itself; anything else (a string) is evaluated.
@@ -182,5 +185,7 @@ class LibraryStatements:
         if not e.args or not isinstance(e.args[0], ast.Var):
             raise self.error(self.current, msg.INVALID_ARGUMENT, f"{e.name} needs a variable")
         result = self.fresh("wb")
-        args = ", ".join("None" if a is None else self.expr(a) for a in e.args)
+        function = (STRING_FUNCTIONS if e.name.startswith("$") else FUNCTIONS)[e.name]
+        args = ", ".join([self.expr(e.args[0])] + [self.checked(a, argument_check(function, i), e.name)
+                                                   for i, a in enumerate(e.args[1:], start=1)])
         return f"({result} := F[{e.name!r}](rt, {args}), {self.assign_expr(e.args[0], f'{result}[1]')})[0][0]"

@@ -26,6 +26,7 @@ PARAMETERS: dict[str, ParameterSpec] = {
     "KERMIT.TIMEOUT": ParameterSpec(8.0, 1.0, 95.0),
     "SCREEN.TIMEOUT": ParameterSpec(0.0, 0.0, 16383.0),
     "TERMINAL": ParameterSpec(4.0, 0.0, 4.0),
+    "VTIMEOUT": ParameterSpec(30.0, 0.0, 1e18),  # s a vision wait may take (0: no limit); docs/vision.md
 }
 PARAMETER_DEFAULTS = {name: spec.default for name, spec in PARAMETERS.items()}
 

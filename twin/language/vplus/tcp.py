@@ -38,7 +38,7 @@ import socket
 from dataclasses import dataclass, field
 from typing import Callable
 
-from ...controller.network import listening_ports
+from ...controller.network import listening, real_port
 from . import messages as msg
 from .fileio import IoError
 from .values import fail
@@ -162,21 +162,21 @@ class TcpEndpoint:
         sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         try:
-            sock.bind(("127.0.0.1", port))
+            sock.bind(("127.0.0.1", real_port(port)))
             sock.listen(8)
         except OSError:
             sock.close()
             raise IoError(msg.DEVICE_NOT_READY) from None  # the port is taken
         sock.setblocking(False)
         self.listener, self.port, self.max_clients, self.server = sock, sock.getsockname()[1], clients, True
-        listening_ports.add(self.port)
+        listening[self.port] = port
         self.ever_opened = True
 
     def _connect(self, address: str, port: int) -> None:
         sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         try:
             sock.settimeout(5.0)  # loopback: refused or accepted at once
-            sock.connect((address, port))
+            sock.connect((address, real_port(port)))
         except OSError:
             sock.close()
             raise IoError(msg.NETWORK_CLOSED) from None
@@ -190,7 +190,7 @@ class TcpEndpoint:
             connection.close()
         self.connections.clear()
         if self.listener is not None:
-            listening_ports.discard(self.port)
+            listening.pop(self.port, None)
             self.listener.close()
             self.listener = None
 

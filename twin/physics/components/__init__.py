@@ -17,6 +17,12 @@ from .robot import Robot
 from .sensor import PhotoEye, PresenceSensor, make_sensor
 from .source import Source
 
+def _camera(config, ctx: CellContext) -> Component:
+    from ..camera import Camera  # twin/physics/camera.py imports this package's base
+
+    return Camera(config, ctx)
+
+
 REGISTRY = {
     "robot": Robot,
     "gripper": make_gripper,
@@ -27,6 +33,7 @@ REGISTRY = {
     "sensor": make_sensor,
     "bin": Bin,
     "tray": Tray,
+    "camera": _camera,
 }
 
 __all__ = ["REGISTRY", "CellContext", "Component", "Conveyor", "Encoder", "NestFeeder", "Bin", "Table",

@@ -11,7 +11,9 @@ can carry; then the part is lost (a "slip" event, the part dropped) and falls.
 * Fingers (`FingerGripper`): engage when the jaws are commanded closed and BOTH pads touch
   the same part; capacity 2 * mu * grip force.
 * Suction (`SuctionGripper`): engage while the vacuum is on and the cup's face is on a part
-  (a contact within the cup geom's 1 mm margin); capacity = cup area x vacuum level
+  (``mujoco.mj_geomDistance`` from the cup geom to a part within 1 mm: the lip seals;
+  MuJoCo 4's contact ``gap`` does not keep such a near contact force-free, so no margin
+  is used); capacity = cup area x vacuum level
   (``vacuum_kpa``), the pull-off force of a sealed cup. The vacuum is on while the hand
   is closed (V+ CLOSEI/OPENI, GPL's gripper signal) or ``vacuum_output`` is on;
   ``blowoff_output`` releases the part at once; ``vacuum_input`` is on while a part is held.
@@ -25,13 +27,14 @@ import mujoco
 import numpy as np
 
 from ..scene import resolve
-from .base import CellContext, Component
+from .base import LIVE, CellContext, Component
 from .robot import Robot
 
 GRASP_WINDOW_S = 0.3  # s after a close command during which a finger grasp may engage
 SLIP_GRACE_S = 0.05  # s after a grasp before slip is checked (grip force builds up)
 RELEASE_GRACE_S = 0.5  # s after the gripper lets go of a part during which it may still touch it
-CUP_MARGIN = 0.001  # m: the cup senses a part this close (contact margin = gap: no force)
+CUP_SEAL = 0.001  # m: the cup seals on a part this close to its face
+SEAL_SEARCH = 0.1  # m: parts whose centre is this near the cup are tested
 
 
 class WeldGripper(Component):
@@ -96,6 +99,7 @@ class WeldGripper(Component):
         d.eq_active[eq] = 1
         self.held = i
         self._held_since = self.time
+        self._robot.carry(int(b2), int(b1))
         self.parts.mark_picked(i)
         self.ctx.event("grasp", part=int(self.parts.instance_of[i]), where=self.ctx.regions.region_of(p2))
         self._check_payload(i)
@@ -130,8 +134,6 @@ class WeldGripper(Component):
         gripping = np.flatnonzero(((pairs[:, 0] == g) & robot[:, 1]) | ((pairs[:, 1] == g) & robot[:, 0]))
         wrench = np.zeros(6)
         for k in gripping.tolist():
-            if d.contact.exclude[k]:  # inside the cup's gap: sensed, no force
-                continue
             mujoco.mj_contactForce(m, d, k, wrench)
             force = d.contact.frame[k].reshape(3, 3).T @ wrench[:3]  # on geom2, world axes
             total = total + (force if pairs[k, 1] == g else -force)
@@ -139,6 +141,7 @@ class WeldGripper(Component):
 
     def _check_slip(self) -> None:
         i = self.held
+        self._robot.carry(int(self.parts.body[i]), self._palm)  # the arm's posture changed
         capacity = self.capacity(i)
         force = self.load(i)
         if force > capacity:
@@ -150,6 +153,8 @@ class WeldGripper(Component):
         d = self.data
         d.eq_active[self._eq[i]] = 0
         self.held = None
+        self._robot.carry(None)
+        self.parts.wake_body(i)  # a part let go at rest must not sleep in mid-air
         self._released = (i, float(d.time))
         pos = d.xpos[self.parts.body[i]]
         where = self.ctx.regions.region_of(pos)
@@ -214,6 +219,8 @@ class FingerGripper(WeldGripper):
         return 2.0 * mu * self.grip_force()
 
     def check(self, t: float) -> None:
+        if self.config.holding_input is not None:
+            self.ctx.io.set(self.config.holding_input, self.held is not None)
         if self.busy:
             self._check_grasp()
         elif self.held is not None and t >= self._held_since + SLIP_GRACE_S:
@@ -245,8 +252,6 @@ class SuctionGripper(WeldGripper):
     def bind(self, model: mujoco.MjModel, data: mujoco.MjData, ctx: CellContext) -> None:
         super().bind(model, data, ctx)
         self._cup = model.geom(f"{self.prefix}cup").id
-        model.geom_margin[self._cup] = CUP_MARGIN
-        model.geom_gap[self._cup] = CUP_MARGIN
         radius = float(model.geom_size[self._cup, 0])
         self.area_m2 = math.pi * radius ** 2
         cup_body = np.zeros(model.nbody, dtype=bool)
@@ -297,21 +302,19 @@ class SuctionGripper(WeldGripper):
                 self.io.set(self.config.vacuum_input, False)
 
     def _check_seal(self) -> None:
-        d = self.data
-        ncon = d.ncon
-        if ncon == 0:
+        """Hold the nearest live part whose surface is within CUP_SEAL of the cup."""
+        m, d, parts = self.model, self.data, self.parts
+        live = parts.live[parts.state[parts.live] == LIVE]
+        if not len(live):
             return
-        g = d.contact.geom[:ncon]
-        cup = self._cup
-        near = (d.contact.dist[:ncon] <= CUP_MARGIN) & ((g[:, 0] == cup) | (g[:, 1] == cup))
-        if not near.any():
-            return
-        other = np.where(g[near, 0] == cup, g[near, 1], g[near, 0])
-        parts = set(self.parts.geom_part[other].tolist()) - {-1}
-        if parts:
-            self._engage(min(parts))
-            if self.config.vacuum_input is not None:
-                self.io.set(self.config.vacuum_input, True)
+        cup = d.geom_xpos[self._cup]
+        near = live[np.linalg.norm(d.xpos[parts.body[live]] - cup, axis=1) < SEAL_SEARCH]
+        for i in near.tolist():
+            if mujoco.mj_geomDistance(m, d, self._cup, int(parts.geom[i]), 2 * CUP_SEAL, None) <= CUP_SEAL:
+                self._engage(i)
+                if self.config.vacuum_input is not None:
+                    self.io.set(self.config.vacuum_input, True)
+                return
 
     def contact_allowed(self, ours: int, part: int, t: float) -> bool:
         return super().contact_allowed(ours, part, t) or (part >= 0 and self._gripping_geom[ours] and self.vacuum)

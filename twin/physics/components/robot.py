@@ -72,6 +72,8 @@ class Robot(Component):
         self._touching: set[tuple[int, int]] = set()
         self.collisions: list[dict] = []
         self.kinematics = RobotKinematics.from_mjcf(self.model_path)
+        self.payload_torque = np.zeros(len(self.dadr))  # set by the gripper while it holds a part
+        self._jacp = np.zeros((3, m.nv))
 
     def home(self, location: list[float]) -> None:
         """Put the robot at the IK of `location` (RIGHTY), held there by its servos."""
@@ -101,11 +103,24 @@ class Robot(Component):
         ctrl[self.act_vel] = qd
         applied = self.data.qfrc_applied
         if qdd is None:
-            applied[self.dadr] = 0.0
+            applied[self.dadr] = self.payload_torque
             return
         self._qdd_full[self.dadr] = qdd
         mujoco.mj_mulM(self.model, self.data, self._torque_full, self._qdd_full)
-        applied[self.dadr] = self._torque_full[self.dadr]
+        applied[self.dadr] = self._torque_full[self.dadr] + self.payload_torque
+
+    def carry(self, part_body: int | None, holder_body: int = -1) -> None:
+        """The drives take the weight of a held part (None: nothing held), as the servos'
+        integral action does: the joint torques that hold its weight where it hangs on the
+        arm (`holder_body`, at the part's centre of mass) are added to the servo's. The
+        gripper's weld still carries the weight itself (what a grip or a cup must hold)."""
+        torque = np.zeros(len(self.dadr))
+        if part_body is not None:
+            m, d = self.model, self.data
+            mujoco.mj_jac(m, d, self._jacp, None, d.xipos[part_body], holder_body)
+            torque = self._jacp[:, self.dadr].T @ (-m.body_mass[part_body] * m.opt.gravity)
+        self.data.qfrc_applied[self.dadr] += torque - self.payload_torque
+        self.payload_torque = torque
 
     # ------------------------------------------------------------------ collisions
     def check(self, t: float) -> None:

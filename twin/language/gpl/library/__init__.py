@@ -64,8 +64,10 @@ class GplRuntime(Protocol):
 def gpl_class(name: str) -> Callable[[type], type]:
     def register(cls: type) -> type:
         cls.gpl_name = name
+        # A GPL member (capitalised: Angles) wins over a Python helper of the same name
+        # in another case (the classmethod angles that builds an Angles location).
         cls.gpl_members = {
-            attr.lower(): attr for attr in dir(cls) if not attr.startswith("_")
+            attr.lower(): attr for attr in sorted(dir(cls), key=lambda a: a[:1].isupper()) if not attr.startswith("_")
         }
         CLASSES[name.lower()] = cls
         return cls
@@ -106,4 +108,4 @@ def member(cls: type, name: str) -> str | None:
 
 
 # The classes register themselves on import.
-from . import console, conveyor, files, locations, modbus, motion, net, robot, signal, thread, xmldoc  # noqa: E402,F401
+from . import console, conveyor, files, locations, modbus, motion, net, robot, signal, thread, vision, xmldoc  # noqa: E402,F401

@@ -17,7 +17,7 @@ Decisions (docs/gpl.md, "Built-in classes"):
   along the location's own tool Z, ``Pos * Trans(0, 0, -ZClearance)`` (like V+
   APPRO), which is above the part for a tool pointing down (pitch 180).
 * Pallet frames step along Loc's X (rows), Y (columns), Z (layers); PalletOrder
-  is a 3-digit number naming the dimensions in stepping order, default 123.
+  0-5 is the GPL Dictionary's code of the stepping order, default 0 (row first).
 """
 
 from __future__ import annotations
@@ -27,6 +27,7 @@ import numpy as np
 from ....controller.location import NULL, Location, trans
 from . import codes
 from . import gpl_class, shared
+from .args import integer
 from .conveyor import ConveyorFrame, conveyor_limit
 from .members import stored
 from .state import from_gpl_angles, solve_joints, to_gpl_angles, tool_pose
@@ -34,6 +35,9 @@ from .state import from_gpl_angles, solve_joints, to_gpl_angles, tool_pose
 CARTESIAN, ANGLES = 0, 1
 MAX_AXES = 12
 MAX_FRAME_DEPTH = 32
+# RefFrame.PalletOrder (GPL Dictionary): the dimensions (0 row, 1 column, 2 layer) in the
+# order PalletNextPos increments them; 0 (row, column, layer) is a new pallet's.
+PALLET_ORDERS = ((0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0))
 NO_CLEARANCE = 1e32  # what GDE-generated .gpo files write for "no clearance" (digest §8.2)
 
 
@@ -143,10 +147,14 @@ class GplLocation:
 
     @Pos.setter
     def Pos(self, value: "GplLocation") -> None:
+        """The total position becomes the value's; the location takes the value's type
+        (field code assigns a Cartesian Pos to an Angles location, and the reverse)."""
         value = location_arg(value)
-        if self._type == ANGLES:
-            self._angles = list(_location_of_type(value, ANGLES)._angles)
+        if value._type == ANGLES:
+            self.Angles(*value._angles)
             return
+        if self._type == ANGLES:
+            self.Type = CARTESIAN
         self._set_total(value.total())
 
     @property
@@ -187,7 +195,10 @@ class GplLocation:
         self._angles[_axis_index(axis)] = _number(value)
 
     def Angles(self, *values) -> None:
-        self._angles_type()
+        """Set the axis values, one per robot axis (GPL Dictionary: the location becomes an
+        Angles location); an axis not given is 0."""
+        if self._type != ANGLES:
+            self.Type = ANGLES
         if len(values) > MAX_AXES:
             raise codes.fail(codes.INVALID_ARGUMENT, f"more than {MAX_AXES} axis values")
         self._angles = [_number(v) for v in values] + [0.0] * (MAX_AXES - len(values))
@@ -285,12 +296,6 @@ class GplLocation:
         return pose * trans(z=-self._zclearance)
 
 
-def _location_of_type(value: GplLocation, kind: int) -> GplLocation:
-    if value._type != kind:
-        raise codes.fail(codes.WRONG_LOCATION_TYPE, "the two Locations are of different types")
-    return value
-
-
 def _axis_index(axis) -> int:
     n = int(axis)
     if not 1 <= n <= MAX_AXES:
@@ -318,7 +323,7 @@ class GplRefFrame:
         self._index = [1, 1, 1]
         self._max_index = [1, 1, 1]
         self._pitch = [0.0, 0.0, 0.0]
-        self._order = 123
+        self._order = 0
         self.conveyor: ConveyorFrame | None = None
 
     @property
@@ -424,16 +429,15 @@ class GplRefFrame:
 
     @PalletOrder.setter
     def PalletOrder(self, value) -> None:
-        value = int(value)
-        if sorted(str(value)) != ["1", "2", "3"]:
-            raise codes.fail(codes.INVALID_ARGUMENT, f"PalletOrder {value} (a permutation of 123)")
+        value = integer(value)
+        if not 0 <= value < len(PALLET_ORDERS):
+            raise codes.fail(codes.INVALID_ARGUMENT, f"PalletOrder {value} (0 to 5)")
         self._order = value
 
     def PalletNextPos(self) -> None:
         """Advance to the next element; after the last one wrap to the first (L2060)."""
         self._pallet()
-        for digit in str(self._order):
-            d = int(digit) - 1
+        for d in PALLET_ORDERS[self._order]:
             if self._index[d] < self._max_index[d]:
                 self._index[d] += 1
                 return

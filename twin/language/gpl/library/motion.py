@@ -34,16 +34,19 @@ from . import gpl_class, shared
 from .members import stored
 from .conveyor import belt_target
 from .locations import ANGLES, GplLocation, location_arg
+from .args import number
 from .state import flange_pose, flange_target, from_gpl_angles, matrix_m, righty_of, robot_state
 
-def _percent(name: str):
+def _percent(name: str, zero: bool = False):
+    """A percentage property; `zero`: 0 is allowed too (Speed2 = 0: no secondary speed)."""
     def get(self) -> float:
         return self._values[name]
 
     def put(self, value) -> None:
-        value = float(value)
-        if not 0.0 < value <= 100.0:
-            raise codes.fail(codes.INVALID_ARGUMENT, f"Profile.{name} = {value:g} (0 < percent <= 100)")
+        value = number(value)
+        if not (0.0 <= value if zero else 0.0 < value) or value > 100.0:
+            low = "0 <=" if zero else "0 <"
+            raise codes.fail(codes.INVALID_ARGUMENT, f"Profile.{name} = {value:g} ({low} percent <= 100)")
         self._values[name] = value
 
     return property(get, put)
@@ -77,7 +80,7 @@ class GplProfile:
         self._text = ""
 
     Speed = _percent("Speed")
-    Speed2 = _percent("Speed2")
+    Speed2 = _percent("Speed2", zero=True)
     Accel = _percent("Accel")
     Decel = _percent("Decel")
     AccelRamp = _seconds("AccelRamp")

@@ -27,7 +27,7 @@ import ipaddress
 import select
 import socket
 
-from ....controller.network import listening_ports
+from ....controller.network import listening, real_port
 from . import codes
 from . import byref, gpl_class
 from .members import stored
@@ -71,12 +71,12 @@ class IPEndPoint:
         self._port = value
 
     def address(self) -> tuple[str, int]:
-        """The loopback address the twin uses for this endpoint; a non-loopback address is
-        refused (the twin simulates a closed network)."""
+        """The loopback address the twin uses for this endpoint (its port as mapped); a
+        non-loopback address is refused (the twin simulates a closed network)."""
         if not _loopback(self._address):
             raise codes.fail(codes.SOCKET_ERROR, f"{self._address} is not a loopback address "
                              "(the twin is a closed network: use 127.0.0.1)")
-        return LOOPBACK, self._port
+        return LOOPBACK, real_port(self._port)
 
 
 def _loopback(address: str) -> bool:
@@ -258,7 +258,7 @@ class TcpListener:
             raise _socket_error(err) from None
         sock.setblocking(False)
         self._sock = sock
-        listening_ports.add(sock.getsockname()[1])
+        listening[sock.getsockname()[1]] = self._endpoint.Port
 
     def _s(self) -> socket.socket:
         if self._sock is None:
@@ -283,7 +283,7 @@ class TcpListener:
 
     def Stop(self) -> None:
         if self._sock is not None:
-            listening_ports.discard(self._sock.getsockname()[1])
+            listening.pop(self._sock.getsockname()[1], None)
             self._sock.close()
             self._sock = None
 
@@ -297,7 +297,7 @@ class UdpClient:
         sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         port = _endpoint(rt, endpoint).address()[1] if endpoint is not None else 0
         try:
-            sock.bind((LOOPBACK, port))
+            sock.bind((LOOPBACK, real_port(port) if port else 0))
         except OSError as err:
             sock.close()
             raise _socket_error(err) from None

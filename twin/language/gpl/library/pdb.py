@@ -85,11 +85,12 @@ class Database:
     values: dict[int, list] = field(default_factory=dict)
 
     def of(self, rt, dataid: int) -> tuple[Entry, list]:
-        entry = TABLE.get(dataid)
-        if entry is None:
-            raise codes.fail(codes.UNDEFINED_DATAID, str(dataid))
+        entry = TABLE[dataid]
         if dataid not in self.values:
-            self.values[dataid] = list(entry.default(rt))
+            try:
+                self.values[dataid] = list(entry.default(rt))
+            except AttributeError:  # a value taken from the robot model, in a run without a cell
+                raise codes.fail(codes.NOT_SUPPORTED, f"DataID {dataid}: this run has no robot") from None
         return entry, self.values[dataid]
 
 
@@ -102,14 +103,16 @@ def database(rt) -> Database:
 
 def _lookup(rt, dataid, unit, unit2) -> tuple[Entry, list]:
     dataid, unit, unit2 = integer(dataid), integer(unit), integer(unit2)
-    entry, values = database(rt).of(rt, dataid)
+    entry = TABLE.get(dataid)
+    if entry is None:
+        raise codes.fail(codes.UNDEFINED_DATAID, str(dataid))
     if entry.robot:
         check_robot(unit)
     elif unit != 1:
         raise codes.fail(codes.INVALID_ARGUMENT, f"DataID {dataid} has unit 1 only, not {unit}")
     if unit2 != 1:
         raise codes.fail(codes.INVALID_ARGUMENT, f"DataID {dataid}: sub unit {unit2}")
-    return entry, values
+    return database(rt).of(rt, dataid)
 
 
 def _element(dataid: int, values: list, index: int) -> int:

@@ -168,15 +168,22 @@ class Robot:
         robot_state(rt).payload = float(value)
 
     @shared
+    def RapidDecel(rt) -> bool:
+        """Reads False: a rapid stop is over once it has been asked for."""
+        return False
+
+    @shared
     def set_RapidDecel(rt, value) -> None:
         """True stops any motion in progress at once."""
         if value:
             rt.robot.stop()
 
     @shared
-    def TrajState(rt, robot=1) -> int:
-        """Twin-defined codes: 0 idle, 1 moving."""
+    def TrajState(rt, robot=1, selector=0) -> int:
+        """Twin-defined codes: 0 idle, 1 moving.  `Robot.TrajState(robot, n)` as field code
+        writes it: the selector is checked as a number and gives the same state."""
         check_robot(robot)
+        number(selector)
         return 1 if rt.robot.moving else 0
 
     @shared

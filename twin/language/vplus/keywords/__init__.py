@@ -65,8 +65,8 @@ class Any:
     """Anything: the keyword checks it itself (an array, a value of either kind)."""
 
 
-# kind name (as written in an annotation) -> the check the generated code applies
-# (runtime.values), None: none
+# kind name (as written in an annotation) -> the check the generated code applies (values.py);
+# None, and any other annotation (tuple: an I/O statement's unit and items), checks nothing
 _CHECKS = {"Loc": "_location", "Point": "_point", "Str": "_str", "Any": None, "float": "_real"}
 
 
@@ -147,4 +147,4 @@ def function(name: str, writes_first: bool = False, names: bool = False):
 
 
 # The domain modules register themselves on import (after the registry exists).
-from . import belts, files, locations, motion, numbers, program, solve, strings, system  # noqa: E402,F401
+from . import belts, files, locations, motion, numbers, program, solve, strings, system, vision  # noqa: E402,F401
