@@ -324,3 +324,19 @@ def test_the_deepest_ev_plus_stack_is_reached_without_a_python_error():
     system, task = run_vplus(text)
     assert task.error.code == msg.TOO_MANY_CALLS and task.error.program == "r"
     assert system.globals["depth"] == (32 * 1024 - 20) // 20
+
+
+# ------------------------------------------------------------ absent features
+@pytest.mark.parametrize("statement", ['MCS "ZERO"', "INT.EVENT 1, 2", "WAIT.START", "x = TIME()",
+                                       "ALTON (1) 2", "ALTER (1) 1, 2, 3, 0, 0, 0", "ALTOFF", 'x = STATUS("a")',
+                                       "AMOVE 5, 10", "MOVEF loc, 10, 10"])
+def test_keywords_of_absent_features_load_and_stop_with_device_not_ready(statement):
+    # Issue #10: a field program loads and runs as far as the cell allows, with a clear
+    # message where a device is absent (docs/vplus.md, "Absent hardware").
+    system, task = run_vplus(program(f'SET loc = TRANS(1)\nTYPE "before"\n{statement}\nTYPE "after"'))
+    assert system.console.output == "before\n"
+    assert task.error.code == msg.DEVICE_NOT_READY and task.error.line == 4
+
+
+def test_absent_keywords_leave_their_names_free_for_variables():
+    assert output_of(program("time = 3\nstatus = 4\nTYPE time + status")) == "7\n"

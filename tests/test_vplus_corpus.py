@@ -307,7 +307,7 @@ _LINE = st.lists(st.sampled_from(_WORDS), min_size=0, max_size=8).map(" ".join)
 _PROGRAM = st.lists(_LINE, min_size=0, max_size=8)
 
 
-@settings(max_examples=400, derandomize=True, deadline=None, suppress_health_check=list(HealthCheck))
+@settings(max_examples=250, derandomize=True, deadline=None, suppress_health_check=list(HealthCheck))
 @given(_PROGRAM)
 def test_fuzzed_programs_end_in_located_errors(lines):
     """Random statements from V+'s own words: the program loads and runs, or stops with a

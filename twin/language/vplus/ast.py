@@ -176,7 +176,7 @@ class Instruction(Statement):
     name: str  # upper case
     args: list[Expr | None]
     always: bool = False  # ended with ALWAYS: DURATION 0.5 ALWAYS, CPON ALWAYS
-    profile: "Expr | None" = None  # ACCEL (profile) accel, decel: the parenthesised argument
+    parenthesised: "Expr | None" = None  # ACCEL (profile) accel, decel; ALTON (lun) mode
 
 
 # Block statements, as built by structure.py.

@@ -937,14 +937,21 @@ class ProgramCompiler(LibraryStatements):
             args = ", ".join([*(repr(a.name.upper()) for a in s.args if isinstance(a, ast.Var)),
                               *(["'ALWAYS'"] if s.always else [])])
         else:  # DURATION 0.5 ALWAYS, ACCEL (1) 50, 50
-            if s.profile is not None and "profile" not in inspect.signature(spec.function).parameters:
-                raise self.error(s, msg.SYNTAX_ERROR, f"{name} takes no parenthesised argument")
             args = ", ".join(([self.checked_arguments(name, spec.function, s.args)] if s.args else [])
                              + (["always=True"] if s.always else [])
-                             + ([f"profile={self.checked(s.profile, '_real', name)}"] if s.profile else []))
+                             + ([self.parenthesised(s, spec.function)] if s.parenthesised is not None else []))
         call = f"I[{name!r}](rt{', ' if args else ''}{args})"
         self.emit(depth, f"yield from {call}" if spec.waits else call)
 
+
+    def parenthesised(self, s: ast.Instruction, function) -> str:
+        """ACCEL (profile) ..., ALTON (lun) ...: the parenthesised argument goes to the
+        keyword's keyword-only parameter besides ALWAYS (a real)."""
+        names = [p.name for p in inspect.signature(function).parameters.values()
+                 if p.kind is p.KEYWORD_ONLY and p.name != "always"]
+        if not names:
+            raise self.error(s, msg.SYNTAX_ERROR, f"{s.name} takes no parenthesised argument")
+        return f"{names[0]}={self.checked(s.parenthesised, '_real', s.name)}"
 
     def keyword(self, s: ast.Instruction) -> str:
         """An instruction's full name.  Like the V+ editor, which expands

@@ -267,8 +267,8 @@ class _ToAst(Transformer_NonRecursive):  # long expressions make deep trees
         return ast.Instruction(str(name).upper(), args, always is not None, **_pos(meta))
 
     def profiled_instruction(self, meta, children):
-        name, profile, args = children
-        return ast.Instruction(str(name).upper(), args, profile=profile, **_pos(meta))
+        name, first, args = children
+        return ast.Instruction(str(name).upper(), args, parenthesised=first, **_pos(meta))
 
     # ---- I/O and keyed statements (lang-library)
     def io_statement(self, meta, children):

@@ -147,4 +147,4 @@ def function(name: str, writes_first: bool = False, names: bool = False):
 
 
 # The domain modules register themselves on import (after the registry exists).
-from . import belts, files, locations, motion, numbers, program, solve, strings, system, vision  # noqa: E402,F401
+from . import absent, belts, files, locations, motion, numbers, program, solve, strings, system, vision  # noqa: E402,F401
