@@ -138,7 +138,7 @@ def test_bounds_and_other_figures():
         "time": {"sim_time_s": {"max": 90}, "wall_time_s": {"min": 1, "max": 30},
                  "realtime_factor": {"min": 10}},
         "program": {"output_excludes": ["Start"]},
-        "events": {"collision": 0, "drop": {"max": 3}},
+        "events": {"collision": 0, "dropped": {"max": 3}},
     }
     assert check(r, expect) == [
         "region 'bin' holds 5 parts, expected between 1 and 4",

@@ -294,14 +294,39 @@ End Module
 
 
 def test_write_only_built_in_properties(tmp_path):
-    """Robot.RapidDecel is write-only (GPL Dictionary): assigning it compiles and runs;
-    reading it is the compiler's undefined symbol."""
+    """A Shared built-in property with only a setter (the GPL Dictionary has write-only
+    members) compiles and runs when assigned, and reading it is -2002."""
+    from twin.language.gpl.library import CLASSES, gpl_class, shared
+
+    @gpl_class("WriteOnlyProbe")
+    class Probe:
+        seen: list = []
+
+        @shared
+        def set_Level(rt, value) -> None:
+            Probe.seen.append(value)
+
+    try:
+        assert output_of("""
+Module M
+    Public Sub Main()
+        WriteOnlyProbe.Level = 7
+        Console.WriteLine("ok")
+    End Sub
+End Module
+""") == "ok\n"
+        assert Probe.seen == [7]
+        with pytest.raises(ProgramError) as caught:
+            output_of("Module M\n    Public Sub Main()\n        Console.WriteLine(WriteOnlyProbe.Level)\n"
+                      "    End Sub\nEnd Module\n")
+        assert caught.value.code == -2002
+    finally:
+        del CLASSES["writeonlyprobe"]
     report = on_cell(tmp_path, """
         Robot.RapidDecel = True
         Console.WriteLine("ok")
 """)
-    assert report.errors == []
-    assert report.output == "ok\n"
+    assert report.errors == [] and report.output == "ok\n"
 
 
 # ------------------------------------------------------------ numeric semantics

@@ -120,7 +120,7 @@ for lines, code, line in [
     (["Dim a As Integer", "ReDim a(3)"], -2004, 4), (["Dim a(2, 2) As Integer", "ReDim a(3)"], -2006, 4),
     (["Dim k As Integer", "k.Value = 1"], -2002, 4), (["Me.x = 1"], -709, 3),
     (["Dim t As New Thread(AddressOf Missing)"], -710, 3), (["Robot.NoSuchThing = 1"], -2002, 3),
-    (["Dim x As Integer = Robot.RapidDecel"], -2002, 3), (["Console.WriteLine(GPL_NOPE)"], -2002, 3),
+    (["Dim x As Integer = Robot.NoSuchValue"], -2002, 3), (["Console.WriteLine(GPL_NOPE)"], -2002, 3),
     (["Try", "Finally", "GoTo out", "End Try", "out:"], -2011, 5),
     (["Try", "Catch", "GoTo out", "End Try", "out:"], -2011, 5),
     (["GoTo inside", "If True Then", "inside:", "End If"], -2011, 3),

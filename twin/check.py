@@ -11,6 +11,10 @@ error (a typo must never pass silently). Example::
     total = 100                # number of parts in the report
     dropped = 0                # parts that fell (exactly 0)
     unplaced = { max = 2 }     # parts in no region that were not dropped
+    region = { bin = [0, 1, 2], nest = [100] }   # where given parts (by id) ended
+    pose = [                   # a part's final position, world frame, mm
+      { id = 100, position = [300.0, -180.0, 860.0], tolerance_mm = 2.0 },
+    ]
 
     [time]                     # times always take the bounds form
     sim_time_s = { max = 400 }        # simulated time of the run, s
@@ -24,13 +28,18 @@ error (a typo must never pass silently). Example::
     output_contains = ["All done. 100 parts processed"]   # each string must occur
     output_excludes = ["*Undefined value*"]              # none of these may occur
 
+    [cycle_time]               # statistics of the report's cycle_times_s, s (bounds)
+    median = { max = 2.0 }     # also mean, min, max and percentiles p<N> (p90, p99.5...)
+    p95 = { max = 2.1 }
+
     [counts]                   # the report's counts (count or bounds), see twin/report.py
     placed = 150               # created, picked, placed, missed, dropped
     missed = 0
 
     [events]                   # number of events of each kind (count or bounds)
     collision = 0
-    drop = { max = 1 }
+    dropped = { max = 1 }
+    order = ["grasp", "release", { kind = "grasp", part = 1 }]   # occur in this order
 
 Meaning of the figures:
 
@@ -41,7 +50,16 @@ Meaning of the figures:
   measured any; otherwise ``sim_time_s`` divided by the number of parts that reached
   a place region (not dropped; region in ``place_regions``, or any region when that
   key is absent). No placed part and no measured cycles is a failure.
-* An event kind under ``[events]`` that never occurred counts 0.
+* An event kind under ``[events]`` must be one the twin emits (``twin.report.EVENT_KINDS``):
+  ``drop`` for ``dropped`` is an error, with the nearest known kind suggested. A kind
+  that never occurred counts 0.
+* ``[events] order`` lists events (a kind, or ``{ kind, part }``) that must occur in that
+  order; other events may come between them.
+* ``[parts] pose``: the distance between the part's final position and ``position`` must
+  be at most ``tolerance_mm`` (default 1 mm); ``region``: each listed part must end in
+  that region. A part id that is not in the report is a failure.
+* ``[cycle_time]`` percentiles interpolate linearly between the sorted cycle times (as
+  numpy's default); a run with no measured cycle fails every ``[cycle_time]`` check.
 * Bounds are inclusive. Counts must be integers; time bounds may be decimals.
 
 Exit status of ``main_check``: 0 when every expectation holds, 1 when any fails
@@ -53,7 +71,12 @@ also writes a JUnit XML file with one test case per expectation.
 from __future__ import annotations
 
 import argparse
+import difflib
+import math
+import re
+import statistics
 import sys
+import time
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
@@ -65,9 +88,10 @@ except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
 from twin.outputs import write_atomically
-from twin.report import COUNT_NAMES, VISION_COUNT_NAMES, Report, ReportError
+from twin.report import COUNT_NAMES, EVENT_KINDS, VISION_COUNT_NAMES, Report, ReportError
 
-__all__ = ["check", "evaluate", "load_expect", "main_check", "ExpectError", "Outcome"]
+__all__ = ["check", "evaluate", "load_expect", "main_check", "print_outcomes", "write_junit", "percentile",
+           "ExpectError", "Outcome"]
 
 
 class ExpectError(Exception):
@@ -80,6 +104,7 @@ class Outcome:
     section: str
     name: str          # as written, e.g. "bin = 100"
     failure: str | None  # the sentence, or None when it held
+    time_s: float = 0.0  # wall-clock time the check took
 
 
 # --- values -----------------------------------------------------------------
@@ -174,12 +199,21 @@ Check = tuple[str, str, Callable[[Report], "str | None"]]   # section, name, fn 
 
 SECTIONS = {
     "regions": None,   # free names
-    "parts": {"total", "dropped", "unplaced"},
+    "parts": {"total", "dropped", "unplaced", "region", "pose"},
     "time": {"sim_time_s", "wall_time_s", "realtime_factor", "cycle_time_s", "place_regions"},
     "program": {"errors", "output_contains", "output_excludes"},
     "counts": set(COUNT_NAMES) | set(VISION_COUNT_NAMES),
-    "events": None,    # free names
+    "cycle_time": None,   # mean, median, min, max, p<N>: checked by _cycle_statistic
+    "events": set(EVENT_KINDS) | {"order"},
 }
+
+
+def _unknown(what: str, name: str, known) -> str:
+    """"unknown event kind 'drop' (did you mean 'dropped'?); known: ..." """
+    close = difflib.get_close_matches(name, list(known), n=1)
+    hint = f" (did you mean {close[0]!r}?)" if close else ""
+    shown = name if what.endswith(":") else repr(name)
+    return f"unknown {what} {shown}{hint}; known: {', '.join(sorted(known))}"
 
 
 def _compile(expect: dict) -> list[Check]:
@@ -195,10 +229,10 @@ def _compile(expect: dict) -> list[Check]:
         if not isinstance(table, dict):
             raise ExpectError(f"[{section}] must be a table")
         if keys is not None:
-            bad = sorted(set(table) - keys)
-            if bad:
-                raise ExpectError(f"unknown key(s) in [{section}]: {', '.join(bad)}; "
-                                  f"known: {', '.join(sorted(keys))}")
+            for name in table:
+                if name not in keys:
+                    what = "event kind" if section == "events" else f"key(s) in [{section}]:"
+                    raise ExpectError(_unknown(what, name, keys))
 
     checks: list[Check] = []
 
@@ -225,6 +259,8 @@ def _compile(expect: dict) -> list[Check]:
         "unplaced": (lambda r: r.unplaced, "{n} in no region (not dropped), expected {b}", "part"),
     }
     for key, value in parts.items():
+        if key in ("region", "pose"):
+            continue
         b = _bounds(f"parts.{key}", value, integer=True, allow_bare=True)
         get, text, noun = part_figures[key]
 
@@ -234,6 +270,8 @@ def _compile(expect: dict) -> list[Check]:
                 return None
             return text.format(n=_plural(n, noun), b=b.describe())
         checks.append(("parts", f"{key} = {b.written()}", part_check))
+    checks += _part_region_checks(parts.get("region", {}))
+    checks += _part_pose_checks(parts.get("pose", []))
 
     # [counts]
     for key, value in expect.get("counts", {}).items():
@@ -295,8 +333,17 @@ def _compile(expect: dict) -> list[Check]:
             return f"the program output contains {_quote(text)}, which it must not (in line {_quote(line)})"
         checks.append(("program", f"output excludes {_quote(text)}", excludes))
 
+    # [cycle_time]
+    for key, value in expect.get("cycle_time", {}).items():
+        checks.append(_cycle_statistic(key, value))
+
     # [events]
-    for kind, value in expect.get("events", {}).items():
+    events_table = expect.get("events", {})
+    if "order" in events_table:
+        checks.append(_event_order_check(events_table["order"]))
+    for kind, value in events_table.items():
+        if kind == "order":
+            continue
         b = _bounds(f"events.{kind}", value, integer=True, allow_bare=True)
 
         def event(r: Report, kind=kind, b=b) -> str | None:
@@ -310,6 +357,163 @@ def _compile(expect: dict) -> list[Check]:
         checks.append(("events", f"{kind} = {b.written()}", event))
 
     return checks
+
+
+def _part_ids(where: str, value: Any) -> list[int]:
+    if isinstance(value, list) and value and all(_is_int(v) for v in value):
+        return value
+    raise ExpectError(f"{where} must be a non-empty list of part ids (integers), got {value!r}")
+
+
+def _find_part(r: Report, part_id: int) -> dict | None:
+    return next((p for p in r.parts if p["id"] == part_id), None)
+
+
+def _part_region_checks(table: Any) -> list[Check]:
+    """[parts] region = { bin = [0, 1], ... }: each listed part ends in that region."""
+    if not isinstance(table, dict):
+        raise ExpectError(f"parts.region must be a table of region = [part ids], got {table!r}")
+    checks: list[Check] = []
+    for region, value in table.items():
+        ids = _part_ids(f"parts.region.{region}", value)
+
+        def in_region(r: Report, region=region, ids=ids) -> str | None:
+            wrong = []
+            for part_id in ids:
+                part = _find_part(r, part_id)
+                if part is None:
+                    wrong.append(f"part {part_id} is not in the report")
+                elif part["region"] != region:
+                    where = "was dropped" if part["dropped"] else (
+                        f"is in {part['region']!r}" if part["region"] else "is in no region")
+                    wrong.append(f"part {part_id} {where}")
+            if not wrong:
+                return None
+            return f"expected parts {_id_list(ids)} in region {region!r}: " + "; ".join(wrong)
+        checks.append(("parts", f"region {region} = {_id_list(ids)}", in_region))
+    return checks
+
+
+def _id_list(ids: list[int]) -> str:
+    return "[" + ", ".join(map(str, ids[:8])) + (", ..." if len(ids) > 8 else "") + "]"
+
+
+POSE_KEYS = {"id", "position", "tolerance_mm"}
+
+
+def _part_pose_checks(items: Any) -> list[Check]:
+    """[parts] pose = [{ id, position = [x, y, z] mm, tolerance_mm }]: a part's final position."""
+    if isinstance(items, dict):
+        items = [items]
+    if not isinstance(items, list):
+        raise ExpectError(f"parts.pose must be a list of {{ id, position, tolerance_mm }} tables, got {items!r}")
+    checks: list[Check] = []
+    for n, item in enumerate(items):
+        where = f"parts.pose[{n}]"
+        if not isinstance(item, dict):
+            raise ExpectError(f"{where} must be a table {{ id, position, tolerance_mm }}, got {item!r}")
+        for key in item:
+            if key not in POSE_KEYS:
+                raise ExpectError(f"{where}: " + _unknown("key", key, POSE_KEYS))
+        part_id, position = item.get("id"), item.get("position")
+        tolerance = item.get("tolerance_mm", 1.0)
+        if not _is_int(part_id):
+            raise ExpectError(f"{where}.id must be a part id (integer), got {part_id!r}")
+        if not (isinstance(position, list) and len(position) == 3 and all(_is_num(v) for v in position)):
+            raise ExpectError(f"{where}.position must be [x, y, z] in mm, got {position!r}")
+        if not _is_num(tolerance) or tolerance < 0:
+            raise ExpectError(f"{where}.tolerance_mm must be a number >= 0, got {tolerance!r}")
+
+        def pose(r: Report, part_id=part_id, position=position, tolerance=tolerance) -> str | None:
+            part = _find_part(r, part_id)
+            if part is None:
+                return f"part {part_id} is not in the report (it has {len(r.parts)} parts)"
+            actual = part["pose"][:3]
+            distance = math.dist(actual, position)
+            if distance <= tolerance:
+                return None
+            return (f"part {part_id} is {distance:.1f} mm from {_xyz(position)} (it is at {_xyz(actual)}"
+                    f"{', dropped' if part['dropped'] else ''}), expected within {_fmt(tolerance)} mm")
+        checks.append(("parts", f"pose of part {part_id} within {_fmt(tolerance)} mm of {_xyz(position)}", pose))
+    return checks
+
+
+def _xyz(v: list[float]) -> str:
+    return "(" + ", ".join(f"{x:.1f}" for x in v) + ") mm"
+
+
+_STATISTIC = re.compile(r"^(mean|median|min|max|p(\d{1,2}(\.\d+)?|100))$")
+
+
+def percentile(values: list[float], q: float) -> float:
+    """The q-th percentile (0-100), linear between the sorted values (numpy's default)."""
+    ordered = sorted(values)
+    rank = (len(ordered) - 1) * q / 100.0
+    low = math.floor(rank)
+    high = min(low + 1, len(ordered) - 1)
+    return ordered[low] + (ordered[high] - ordered[low]) * (rank - low)
+
+
+def _cycle_statistic(key: str, value: Any) -> Check:
+    """[cycle_time] mean/median/min/max/p<N> = { min, max }: over the measured cycle times."""
+    if not _STATISTIC.match(key):
+        raise ExpectError(_unknown("key(s) in [cycle_time]:", key, ["mean", "median", "min", "max", "p50", "p95", "p99"])
+                          + " (or any percentile p<N>, 0 < N <= 100)")
+    b = _bounds(f"cycle_time.{key}", value, integer=False, allow_bare=False)
+    compute = {"mean": statistics.fmean, "median": statistics.median, "min": min, "max": max}.get(key)
+    if compute is None:
+        q = float(key[1:])
+        compute = lambda values, q=q: percentile(values, q)   # noqa: E731
+
+    def fn(r: Report) -> str | None:
+        if not r.cycle_times_s:
+            return f"cycle time {key} is undefined: the run measured no cycle"
+        v = compute(r.cycle_times_s)
+        if b.holds(v):
+            return None
+        return (f"cycle time {key} was {v:.3f} s (over {_plural(len(r.cycle_times_s), 'cycle')}), "
+                f"expected {b.describe('s')}")
+    return ("cycle_time", f"{key} = {b.written()}", fn)
+
+
+def _event_order_check(items: Any) -> Check:
+    """[events] order = ["grasp", { kind = "release", part = 0 }, ...]: a subsequence of the events."""
+    if not isinstance(items, list) or not items:
+        raise ExpectError(f"events.order must be a non-empty list of event kinds or {{ kind, part }} tables, "
+                          f"got {items!r}")
+    wanted: list[tuple[str, int | None]] = []
+    for n, item in enumerate(items):
+        where = f"events.order[{n}]"
+        kind, part = (item, None) if isinstance(item, str) else (
+            (item.get("kind"), item.get("part")) if isinstance(item, dict) else (None, None))
+        if isinstance(item, dict):
+            for key in item:
+                if key not in ("kind", "part"):
+                    raise ExpectError(f"{where}: " + _unknown("key", key, ["kind", "part"]))
+        if not isinstance(kind, str):
+            raise ExpectError(f"{where} must be an event kind or {{ kind, part }}, got {item!r}")
+        if kind not in EVENT_KINDS:
+            raise ExpectError(f"{where}: " + _unknown("event kind", kind, EVENT_KINDS))
+        if part is not None and not _is_int(part):
+            raise ExpectError(f"{where}.part must be a part id (integer), got {part!r}")
+        wanted.append((kind, part))
+
+    def label(kind: str, part: int | None) -> str:
+        return kind if part is None else f"{kind} of part {part}"
+
+    def fn(r: Report) -> str | None:
+        i = 0
+        last_time = None
+        for event in r.events:
+            kind, part = wanted[i]
+            if event.get("kind") == kind and (part is None or event.get("part") == part):
+                i, last_time = i + 1, event.get("time")
+                if i == len(wanted):
+                    return None
+        after = "" if i == 0 else f" after {label(*wanted[i - 1])}" + (
+            f" at t = {last_time:.3f} s" if last_time is not None else "")
+        return f"events out of order: no {label(*wanted[i])}{after} (event {i + 1} of {len(wanted)} in the order)"
+    return ("events", "order " + ", ".join(label(*w) for w in wanted), fn)
 
 
 def _time_check(get, text, b: Bounds, unit: str):
@@ -393,7 +597,12 @@ def load_expect(path: str | Path) -> dict:
 
 def evaluate(report: Report, expect: dict) -> list[Outcome]:
     """Every expectation with its outcome, in file order (ExpectError if `expect` is invalid)."""
-    return [Outcome(section, name, fn(report)) for section, name, fn in _compile(expect)]
+    outcomes = []
+    for section, name, fn in _compile(expect):
+        start = time.perf_counter()
+        failure = fn(report)
+        outcomes.append(Outcome(section, name, failure, time.perf_counter() - start))
+    return outcomes
 
 
 def check(report: Report, expect: dict) -> list[str]:
@@ -404,15 +613,25 @@ def check(report: Report, expect: dict) -> list[str]:
 
 
 def write_junit(path: str | Path, outcomes: list[Outcome], *, suite: str = "twin check",
-                error: str | None = None) -> None:
-    """JUnit XML: one testcase per expectation; `error` alone records a load error."""
+                error: str | None = None, report: Report | None = None) -> None:
+    """JUnit XML: one testcase per expectation; `error` alone records a load error.
+
+    With the `report`, the suite carries the run's wall-clock time as its time and the
+    run's program, scene, seed, simulated time (and interruption) as properties."""
     suite_el = ET.Element("testsuite", name=suite)
+    if report is not None:
+        suite_el.set("time", f"{report.wall_time_s:.3f}")
+        props = ET.SubElement(suite_el, "properties")
+        for key in ("program", "scene", "seed", "sim_time_s", "wall_time_s", "interrupted"):
+            if hasattr(report, key):
+                ET.SubElement(props, "property", name=key, value=str(getattr(report, key)))
     failures = 0
     if error is not None:
         case = ET.SubElement(suite_el, "testcase", classname="twin.check", name="load")
         ET.SubElement(case, "error", message=error).text = error
     for o in outcomes:
-        case = ET.SubElement(suite_el, "testcase", classname=f"twin.check.{o.section}", name=o.name)
+        case = ET.SubElement(suite_el, "testcase", classname=f"twin.check.{o.section}", name=o.name,
+                             time=f"{o.time_s:.6f}")
         if o.failure is not None:
             failures += 1
             ET.SubElement(case, "failure", message=o.failure).text = o.failure
@@ -449,22 +668,28 @@ def main_check(argv: list[str] | None = None) -> int:
         if args.junit:
             _safe_junit(args.junit, [], error=str(e))
         return 2
-    failed = [o for o in outcomes if o.failure is not None]
     if args.junit:
-        if not _safe_junit(args.junit, outcomes):
+        if not _safe_junit(args.junit, outcomes, report=report):
             return 2
+    return print_outcomes(outcomes, args.report)
+
+
+def print_outcomes(outcomes: list[Outcome], source: str) -> int:
+    """The verdict on standard output; 0 when all hold, 1 otherwise."""
+    failed = [o for o in outcomes if o.failure is not None]
     if failed:
-        print(f"FAILED: {len(failed)} of {len(outcomes)} expectations for {args.report}:")
+        print(f"FAILED: {len(failed)} of {len(outcomes)} expectations for {source}:")
         for o in failed:
             print(f"  - {o.failure}")
         return 1
-    print(f"OK: all {len(outcomes)} expectations hold for {args.report}")
+    print(f"OK: all {len(outcomes)} expectations hold for {source}")
     return 0
 
 
-def _safe_junit(path: str, outcomes: list[Outcome], error: str | None = None) -> bool:
+def _safe_junit(path: str, outcomes: list[Outcome], error: str | None = None,
+                report: Report | None = None) -> bool:
     try:
-        write_junit(path, outcomes, error=error)
+        write_junit(path, outcomes, error=error, report=report)
         return True
     except OSError as e:
         print(f"twin check: error: cannot write JUnit file {path}: {e}", file=sys.stderr)

@@ -2,6 +2,7 @@
 
     twin run PROGRAM|PROJECT_DIR [--scene SCENE] [--main NAME] [--report R.json] [--rrd R.rrd]
                      [--max-sim-time S] [--max-wall-time S] [--no-progress-limit S] [--seed N]
+                     [--expect EXPECT.toml [--junit FILE.xml]] [--seeds N]
     twin check REPORT --expect EXPECT.toml [--junit FILE.xml]
     twin serve PROGRAM|PROJECT_DIR [--scene SCENE] [--fast] [--viewer] [--report R.json] ...
     twin calibrate SCENE [--camera NAME]
@@ -160,11 +161,14 @@ def validate_run(args: argparse.Namespace) -> None:
     if len(programs) > 1 and any(Path(p).is_dir() for p in programs):
         raise InputError(f"program {program}: a GPL project folder is run alone, not with other files")
     inputs.append(check_input_file(scene, "scene"))
-    outputs = {what: path for what, path in (("report", args.report), ("recording", args.rrd)) if path}
+    if getattr(args, "expect", None):
+        inputs.append(check_input_file(args.expect, "expectation file"))
+    outputs = {what: path for what, path in (("report", args.report), ("recording", args.rrd),
+                                             ("JUnit file", getattr(args, "junit", None))) if path}
     for what, path in outputs.items():
         check_output(path, what, inputs)
     check_distinct(outputs)
-    if outputs:
+    if args.report or args.rrd:
         root = sandbox_root(program, args.report or args.rrd)
         try:
             check_root(root)
@@ -184,11 +188,17 @@ def _run(args: argparse.Namespace) -> int:
     from .runner import run_program
 
     validate_run(args)
+    expect, code = _load_expectations(args)
+    if code is not None:
+        return code
+    if args.seeds is not None:
+        return _run_seeds(args, expect)
     try:
         result = run_program(
             args.program, scene=args.scene, main=args.main, report_path=args.report,
             rrd_path=args.rrd, max_sim_time=args.max_sim_time, seed=args.seed,
             max_wall_time=args.max_wall_time, no_progress_limit=args.no_progress_limit,
+            progress=_show_progress(args), handle_signals=True,
         )
     except ProgramError as err:
         print(str(err), file=sys.stderr)
@@ -196,16 +206,97 @@ def _run(args: argparse.Namespace) -> int:
     for error in result.report.errors:
         print(ProgramError.from_dict(error), file=sys.stderr)
     report = result.report
+    print(_summary(report), file=sys.stderr)
+    if report.interrupted:
+        return INTERRUPTED
+    if expect is not None:
+        return _check_run(args, report, expect)
+    return EXIT_PROGRAM_ERROR if report.errors else EXIT_OK
+
+
+INTERRUPTED = 130   # the shell's status for a command stopped by Ctrl-C (128 + SIGINT)
+
+
+def _summary(report) -> str:
+    """'twin: 185.1 s simulated in 9.4 s (19.7x real time); 101 parts: bin 100, nest 1;
+    no part dropped; no errors; cycle time 1.824 s (median)'."""
     rate = report.sim_time_s / report.wall_time_s if report.wall_time_s > 0 else float("inf")
     regions = ", ".join(f"{name} {count}" for name, count in report.regions.items() if count)
-    print(
-        f"twin: {report.sim_time_s:.1f} s simulated in {report.wall_time_s:.1f} s "
-        f"({rate:.1f}x real time); {len(report.parts)} parts: {regions or 'none placed'}"
+    dropped = [p["id"] for p in report.parts if p["dropped"]]
+    shown = ", ".join(map(str, dropped[:10])) + (", ..." if len(dropped) > 10 else "")
+    errors = len(report.errors)
+    return (
+        ("twin: interrupted at " if report.interrupted else "twin: ")
+        + f"{report.sim_time_s:.1f} s simulated in {report.wall_time_s:.1f} s "
+        f"({rate:.1f}x real time); {len(report.parts)} parts: {regions or 'none placed'}; "
+        + (f"{len(dropped)} dropped (part{'s' if len(dropped) > 1 else ''} {shown})" if dropped
+           else "no part dropped")
+        + f"; {errors or 'no'} error{'' if errors == 1 else 's'}"
+        + (" (" + "; ".join(e["message"] for e in report.errors[:3]) + (", ..." if errors > 3 else "") + ")"
+           if errors else "")
         + (f"; cycle time {statistics.median(report.cycle_times_s):.3f} s (median)"
-           if report.cycle_times_s else ""),
-        file=sys.stderr,
+           if report.cycle_times_s else "")
     )
-    return EXIT_PROGRAM_ERROR if report.errors else EXIT_OK
+
+
+def _show_progress(args: argparse.Namespace) -> bool:
+    """The progress line: on a terminal only, and not with --quiet."""
+    return not args.quiet and sys.stderr.isatty()
+
+
+def _add_run_options(run: argparse.ArgumentParser) -> None:
+    """`twin run` options for CI: run and check in one command, several seeds at once."""
+    run.add_argument("--expect", default=None, metavar="EXPECT.toml",
+                     help="check the report against these expectations after the run (exit status: the check's)")
+    run.add_argument("--junit", default=None, metavar="FILE.xml", help="with --expect: also write JUnit XML")
+    run.add_argument("--quiet", action="store_true",
+                     help="no progress line (it is shown only on a terminal, for runs over a few seconds)")
+    run.add_argument("--seeds", type=_positive_int, default=None, metavar="N",
+                     help="run N feeder seeds (--seed and the next N-1; default from 0) in parallel processes "
+                          "and summarise the failures by seed")
+
+
+def _positive_int(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    return value
+
+
+def _load_expectations(args: argparse.Namespace) -> tuple[dict | None, int | None]:
+    """The expectation file, read and validated before the run (a typo costs no run);
+    (None, 2) with the reason on standard error when it is wrong."""
+    from .check import ExpectError, load_expect
+
+    if args.junit and not args.expect:
+        print("twin run: error: --junit needs --expect", file=sys.stderr)
+        return None, 2
+    if args.expect is None:
+        return None, None
+    try:
+        return load_expect(args.expect), None
+    except ExpectError as e:
+        print(f"twin run: error: {e}", file=sys.stderr)
+        return None, 2
+
+
+def _check_run(args: argparse.Namespace, report, expect: dict) -> int:
+    from .check import _safe_junit, evaluate, print_outcomes
+
+    outcomes = evaluate(report, expect)
+    if args.junit and not _safe_junit(args.junit, outcomes, report=report):
+        return 2
+    return print_outcomes(outcomes, args.report or " ".join(map(str, args.program)))
+
+
+def _run_seeds(args: argparse.Namespace, expect: dict | None) -> int:
+    from .seeds import run_seeds, summarise
+
+    first = args.seed if args.seed is not None else 0
+    outcomes = run_seeds(args.program, list(range(first, first + args.seeds)), scene=args.scene, main=args.main,
+                         max_sim_time=args.max_sim_time, report=args.report, expect=expect)
+    print(summarise(outcomes), file=sys.stderr)
+    return 1 if any(o.failures for o in outcomes) else 0
 
 
 def _port_pair(text: str) -> tuple[int, int]:
@@ -281,6 +372,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="stop a run in which nothing moves and no signal changes for S simulated "
                           "seconds (default: the scene's [controller] no_progress_s, else 30; 0: never)")
     run.add_argument("--seed", type=non_negative_int, default=None, help="random seed (default: the scene's)")
+    _add_run_options(run)
     run.set_defaults(handler=_run)
 
     serve = sub.add_parser("serve", help="keep a server program (V+ TCP server, GPL TCP Command Server) "

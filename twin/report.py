@@ -20,8 +20,11 @@ Layout (``Report.to_json``)::
       "counts": {"created": 101, "picked": 100, "placed": 100, "missed": 0, "dropped": 0},
       "components": {"conveyor.infeed": {"speed_mm_s": 100.0, "travel_mm": 30000.0, ...}},
       "events": [ {"time": 12.5, "kind": "drop", ...free fields...} ],
-      "cycle_times_s": [0.61, 0.58]
+      "cycle_times_s": [0.61, 0.58],
+      "interrupted": false              # true when Ctrl-C / SIGTERM stopped the run early
     }
+
+The JSON Schema of this layout is twin/schemas/report.schema.json (docs/ci.md).
 
 Units: part positions in millimetres (as the controller reports them), orientation
 as a unit quaternion in MuJoCo's order (w, x, y, z); times in seconds of simulated
@@ -74,7 +77,12 @@ from .outputs import write_atomically
 
 FORMAT_VERSION = 1
 
-__all__ = ["Report", "ReportError", "count_regions", "COUNT_NAMES", "VISION_COUNT_NAMES", "FORMAT_VERSION"]
+__all__ = ["Report", "ReportError", "count_regions", "COUNT_NAMES", "EVENT_KINDS", "VISION_COUNT_NAMES", "FORMAT_VERSION"]
+
+# Every kind of cell event a run reports (twin.physics and its components); `twin check` rejects any other
+# name, and tests/test_ci_tooling.py keeps this list and the cell in step.
+EVENT_KINDS = ("present", "spawn", "grasp", "release", "slip", "overload", "missed", "dropped", "collision",
+               "feeder_empty", "source_empty", "tray_swapped")
 
 
 class ReportError(Exception):
@@ -114,6 +122,7 @@ class Report:
     cycle_times_s: list[float] = field(default_factory=list)
     counts: dict[str, int] | None = None
     components: dict[str, dict] = field(default_factory=dict)
+    interrupted: bool = False
 
     def __post_init__(self) -> None:
         _validate(self)
@@ -251,6 +260,7 @@ def _validate(r: Report) -> None:
         need(ev.get("time") is None or _is_num(ev.get("time")), f"events[{i}].time must be a number or null")
     need(isinstance(r.cycle_times_s, list) and all(_is_num(v) for v in r.cycle_times_s),
          "cycle_times_s must be a list of numbers")
+    need(isinstance(r.interrupted, bool), "interrupted must be true or false")
 
 
 def _first_non_finite(obj: Any, where: str = "") -> str:

@@ -11,20 +11,27 @@ Python or a notebook:
 from __future__ import annotations
 
 import os
+import signal
 import tempfile
+import threading
 import uuid
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+
+from typing import TYPE_CHECKING
 
 from .controller.sandbox import SandboxError, check_root
 from .errors import InputError, ProgramError
 from .language.gpl.errors import NO_START_PROCEDURE
-from .language.gpl.runtime import GplSystem
 from .language.vplus.runtime import Console, VPlusSystem
 from .outputs import check_replaceable, replace_output, temporary_beside
 from .report import Report
 from .resources import find_user_file
 from .simulation import DEFAULT_SCENE, Simulation
+
+if TYPE_CHECKING:
+    from .language.gpl.runtime import GplSystem
 
 
 @dataclass
@@ -91,6 +98,8 @@ def _start_gpl(sim: Simulation, project: Path, main: str | None, console: Consol
                sandbox: Path) -> GplSystem:
     """A GPL project folder: Project.gpr names the files and the start procedure
     (`main` overrides it)."""
+    from .language.gpl.runtime import GplSystem  # here: a V+ run need not load the GPL compiler
+
     system = GplSystem(sim.controller, sim.io, sim.clock, sim.scheduler, console=console, sandbox=sandbox,
                        seed=sim.cell.seed)
     system.vision = sim.vision
@@ -138,23 +147,72 @@ def run_program(
     max_sim_time: float = 3600.0,
     seed: int | None = None,
     console: Console | None = None,
+    progress: bool = False,
+    handle_signals: bool = False,
     max_wall_time: float | None = None,
     no_progress_limit: float | None = None,
 ) -> RunResult:
     """Load the cell, load and start the program (a V+ file or a GPL project
-    folder, or several V+ files loaded together), simulate, report.  `no_progress_limit`
-    overrides the scene's [controller] no_progress_s (0: no limit); see
-    twin.controller.watchdog."""
-    started = start_program(program, scene, main, report_path, rrd_path, seed, console)
-    sim = started.simulation
-    if no_progress_limit is not None:
-        sim.no_progress_s = no_progress_limit if no_progress_limit > 0 else None
+    folder, or several V+ files loaded together), simulate, report.
+
+    `progress`: a progress line on standard error once the run lasts a few seconds.
+    `handle_signals`: Ctrl-C (SIGINT) and SIGTERM stop the run at the next major cycle;
+    the report (marked interrupted) and the recording are still written (a second Ctrl-C
+    stops at once).  Only from the main thread; `twin run` sets both.
+    `max_wall_time`, `no_progress_limit` (over the scene's [controller] no_progress_s; 0:
+    none): the watchdog's limits (twin.controller.watchdog)."""
+    # From the start: a signal while the cell loads stops the run before its first cycle;
+    # and on, while the recording and the report are written.
+    with _stop_on_signals(handle_signals) as stop:
+        started = start_program(program, scene, main, report_path, rrd_path, seed, console)
+        sim = started.simulation
+        sim.stop = stop
+        if no_progress_limit is not None:
+            sim.no_progress_s = no_progress_limit if no_progress_limit > 0 else None
+        sim.begin(max_sim_time, max_wall_time)
+        try:
+            with _progress(sim, progress) as on_cycle:
+                sim.advance(on_cycle=on_cycle)
+        except BaseException:
+            _discard_recording(started)
+            raise
+        return finish_run(started, sim.outcome())
+
+
+@contextmanager
+def _stop_on_signals(enabled: bool):
+    """SIGINT and SIGTERM set the yielded event (the run stops at its next cycle); a second
+    one raises KeyboardInterrupt."""
+    stop = threading.Event()
+    if not enabled or threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+
+    def handler(signum, frame):
+        if stop.is_set():
+            raise KeyboardInterrupt
+        stop.set()
+
+    previous = {sig: signal.signal(sig, handler) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
-        outcome = sim.run(max_sim_time=max_sim_time, max_wall_time=max_wall_time)
-    except BaseException:
-        _discard_recording(started)
-        raise
-    return finish_run(started, outcome)
+        yield stop
+    finally:
+        for sig, old in previous.items():
+            signal.signal(sig, old)
+
+
+@contextmanager
+def _progress(sim: Simulation, enabled: bool):
+    if not enabled:
+        yield None
+        return
+    from .progress import Progress
+
+    line = Progress(sim)
+    try:
+        yield line
+    finally:
+        line.close()
 
 
 def start_program(program: str | Path | list[str | Path], scene: str | Path | None = None, main: str | None = None,
@@ -229,6 +287,7 @@ def finish_run(started: StartedRun, outcome) -> RunResult:
         regions=sim.cell.region_counts(parts), events=events, cycle_times_s=cycle_times(events),
         counts={**sim.cell.counts(parts), **(sim.vision.report_counts() if sim.vision is not None else {})},
         components=sim.cell.components_report(),
+        interrupted=sim.interrupted,
     )
     if report_path is not None:
         report.write(report_path)

@@ -9,6 +9,7 @@ Simulated time drives everything; nothing waits on the wall clock.
 
 from __future__ import annotations
 
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -59,6 +60,8 @@ class Simulation:
         self.vision = VisionServer.for_cell(self.cell, self.cell.scene, self.scene_path)  # None without [vision]
         self._events_recorded = 0  # cell events already sent to the recorder
         self.settle_s = float(controller_cfg.get("settle_after_program_s", 3.0))
+        self.stop = threading.Event()   # set (by a signal handler): the run stops at the next cycle
+        self.interrupted = False        # the last run was stopped by `stop`
         no_progress = float(controller_cfg.get("no_progress_s", DEFAULT_NO_PROGRESS_S))
         self.no_progress_s: float | None = no_progress if no_progress > 0 else None
         self.clock_reads = 0  # how often the programs read the time (watchdog: a wait may end)
@@ -71,74 +74,108 @@ class Simulation:
         self.deadlock_confirm_s = DEADLOCK_CONFIRM_S + max(
             (float(c.config.delay) for c in self.cell.components if c.section == "feeder"), default=0.0)
 
+    def taught_locations(self) -> dict[str, Location]:
+        return {name: Location(*values) for name, values in self.cell.locations().items()}
+
     def clock(self) -> float:
         self.clock_reads += 1
         return self.cell.time
-
-    def taught_locations(self) -> dict[str, Location]:
-        return {name: Location(*values) for name, values in self.cell.locations().items()}
 
     def run(self, max_sim_time: float = 3600.0, on_cycle: Callable[[], bool] | None = None,
             max_wall_time: float | None = None) -> RunOutcome:
         """Run until every task has ended and the cell has settled, or until `on_cycle`,
         called after every major cycle (`twin serve` paces and stops with it), says stop,
-        or a limit or the watchdog stops it (docs/robustness.md, "Runaways")."""
+        or `stop` is set, or a limit or the watchdog stops it (docs/robustness.md)."""
+        self.begin(max_sim_time, max_wall_time)
+        self.advance(on_cycle=on_cycle)
+        return self.outcome()
+
+    def begin(self, max_sim_time: float = 3600.0, max_wall_time: float | None = None) -> None:
+        """Start a run that `advance` carries on, in as many pieces as wanted (a notebook
+        runs to a time, a line or a signal, looks, and continues)."""
+        self.max_sim_time = max_sim_time
+        self.watchdog = Watchdog(WatchdogLimits(self.no_progress_s, max_wall_time, self.deadlock_confirm_s))
+        self.errors: list[dict] = []
+        self.program_end: float | None = None
+        self.finished = False
+        self.interrupted = False
+        self._crashed = False
+        self._wall_s = 0.0
+
+    def advance(self, until: Callable[[], bool] | None = None,
+                on_cycle: Callable[[], bool | None] | None = None) -> bool:
+        """Major cycles until the run is over or `until()` is true after a cycle; returns
+        whether the run is over.  `on_cycle` is called after every cycle (progress, pacing);
+        a true answer ends the run there."""
         wall_start = time.perf_counter()
-        watchdog = Watchdog(WatchdogLimits(self.no_progress_s, max_wall_time, self.deadlock_confirm_s))
-        cell, controller, scheduler = self.cell, self.controller, self.scheduler
-        steps = max(1, round(MAJOR_CYCLE_S / cell.timestep))
-        errors: list[dict] = []
-        program_end = None
-        crashed = False
-        while True:
-            if program_end is None:
-                reads, alive = self.clock_reads, self._live_tasks()
-                scheduler.run_cycle()
-                for task in scheduler.tasks:
-                    error = getattr(task, "error", None)
-                    if error is not None and not getattr(task, "reported", False):
-                        task.reported = True
-                        controller.stop()
-                        errors.append(error.as_dict(cell.time))
-                if not scheduler.alive:
-                    program_end = cell.time
-            # After the programs end the robot finishes its motion and parts come to rest.
-            elif not controller.moving and cell.time >= program_end + self.settle_s:
-                break
-            if cell.time >= max_sim_time:
-                error = ProgramError(f"*Simulation time limit reached* ({max_sim_time:g} s)")
-                errors.append(error.as_dict(cell.time))
-                program_end = program_end if program_end is not None else cell.time
-                break
-            for _ in range(steps):
-                controller.servo_step()
-                cell.step(1)
-            collisions = cell.take_collisions()
-            if collisions and not crashed:  # the first one stops everything; all are events
-                crashed = True
-                error = self._stop_for_collision(collisions[0])
-                if error is not None:  # no program was running to take it
-                    errors.append(error.as_dict(cell.time))
-            fault = controller.take_fault()  # the robot stopped by itself (a belt window violation)
-            if fault is not None and self._give_to_tasks(fault) is not None:
-                errors.append(fault.as_dict(cell.time))
-            if program_end is None:
-                runaway = self._watch(watchdog, self.clock_reads == reads, alive)
-                if runaway is not None:
-                    controller.stop()
-                    errors.append(runaway.as_dict(cell.time))
-                    program_end = cell.time
+        try:
+            while not self.finished:
+                self._cycle()
+                if on_cycle is not None and on_cycle() and not self.finished:
+                    self.finished = True
+                    self.program_end = self.program_end if self.program_end is not None else self.cell.time
+                if self.stop.is_set() and not self.finished:
+                    self.finished = self.interrupted = True
+                    self.program_end = self.program_end if self.program_end is not None else self.cell.time
+                if until is not None and until():
                     break
-            self._record()
-            if on_cycle is not None and on_cycle():
-                program_end = program_end if program_end is not None else cell.time
-                break
-        return RunOutcome(cell.time, time.perf_counter() - wall_start, program_end, errors)
+        finally:
+            self._wall_s += time.perf_counter() - wall_start
+        return self.finished
+
+    def outcome(self) -> RunOutcome:
+        return RunOutcome(self.cell.time, self._wall_s, self.program_end, self.errors)
+
+    def _cycle(self) -> None:
+        """One major cycle: the tasks, then the servos and the physics; sets `finished`."""
+        cell, controller, scheduler, errors = self.cell, self.controller, self.scheduler, self.errors
+        steps = max(1, round(MAJOR_CYCLE_S / cell.timestep))
+        if self.program_end is None:
+            reads, alive = self.clock_reads, self._live_tasks()
+            scheduler.run_cycle()
+            for task in scheduler.tasks:
+                error = getattr(task, "error", None)
+                if error is not None and not getattr(task, "reported", False):
+                    task.reported = True
+                    controller.stop()
+                    errors.append(error.as_dict(cell.time))
+            if not scheduler.alive:
+                self.program_end = cell.time
+        # After the programs end the robot finishes its motion and parts come to rest.
+        elif not controller.moving and cell.time >= self.program_end + self.settle_s:
+            self.finished = True
+            return
+        if cell.time >= self.max_sim_time:
+            error = ProgramError(f"*Simulation time limit reached* ({self.max_sim_time:g} s)")
+            errors.append(error.as_dict(cell.time))
+            self.program_end = self.program_end if self.program_end is not None else cell.time
+            self.finished = True
+            return
+        for _ in range(steps):
+            controller.servo_step()
+            cell.step(1)
+        collisions = cell.take_collisions()
+        if collisions and not self._crashed:  # the first one stops everything; all are events
+            self._crashed = True
+            error = self._stop_for_collision(collisions[0])
+            if error is not None:  # no program was running to take it
+                errors.append(error.as_dict(cell.time))
+        fault = controller.take_fault()  # the robot stopped by itself (a belt window violation)
+        if fault is not None and self._give_to_tasks(fault) is not None:
+            errors.append(fault.as_dict(cell.time))
+        if self.program_end is None:
+            runaway = self._watch(self.clock_reads == reads, alive)
+            if runaway is not None:
+                controller.stop()
+                errors.append(runaway.as_dict(cell.time))
+                self.program_end = cell.time
+                self.finished = True
+        self._record()
 
     def _live_tasks(self) -> list:
         return [t for t in self.scheduler.tasks if not t.finished and not getattr(t, "paused", False)]
 
-    def _watch(self, watchdog: Watchdog, no_clock_read: bool, alive_before: list):
+    def _watch(self, no_clock_read: bool, alive_before: list):
         """Tell the watchdog what this cycle changed (before `_record` drains the signal
         changes); the error that ends the run, if it is a runaway.  Progress is what the
         programs do or look at: the robot or the hand moving, an output or soft signal
@@ -154,7 +191,7 @@ class Simulation:
         blocked = (no_clock_read and not progressed and not io.changes and not controller.moving
                    and not external_wait and all(task_is_blocked(w, t.SLICE) for w, t in zip(waits, live))
                    and self._cell_at_rest())
-        return watchdog.observe(cell.time, progressed, blocked, external_wait, live)
+        return self.watchdog.observe(cell.time, progressed, blocked, external_wait, live)
 
     def _cell_at_rest(self) -> bool:
         """Nothing in the cell moves or happens, and nothing will by itself: no new event, no

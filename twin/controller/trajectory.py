@@ -19,19 +19,19 @@ spline, so sampling a whole move is a few vectorised numpy calls.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
+from types import SimpleNamespace
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
-import toppra as ta
-import toppra.algorithm as algo
-import toppra.constraint as constraint
-from scipy.interpolate import CubicSpline
 
 from .kinematics import STRAIGHT_LINE_CONFIG, KinematicsError, RobotKinematics
 
-ta.setup_logging("WARNING")
+if TYPE_CHECKING:
+    from scipy.interpolate import CubicSpline
 
 N_GRID = 100  # toppra grid points
 LINE_TOLERANCE = 0.05e-3  # m: target deviation of a straight-line motion (the contract is 0.1 mm)
@@ -140,6 +140,36 @@ class Trajectory:
 
 
 # ---------------------------------------------------------------- toppra
+@functools.cache
+def _libs() -> SimpleNamespace:
+    """toppra and scipy's CubicSpline, imported by the first plan: with the scipy and
+    matplotlib modules toppra pulls in they are most of the package's import time, which a
+    run that never moves the robot (or a `twin check`) need not pay."""
+    import toppra
+    import toppra.algorithm
+    import toppra.constraint
+    from scipy.interpolate import CubicSpline
+
+    toppra.setup_logging("WARNING")
+    return SimpleNamespace(toppra=toppra, algorithm=toppra.algorithm, constraint=toppra.constraint,
+                           CubicSpline=CubicSpline)
+
+
+@functools.lru_cache(maxsize=512)
+def _constraints(vmax: tuple[float, ...], abounds: tuple[tuple[float, float], ...]):
+    """The toppra joint velocity and acceleration constraints for these limits.  They hold
+    only the limits (the path is given at each solve), and building them costs about a
+    fifth of a MOVE's planning (toppra validates and formats the limit arrays), while a
+    program's moves reuse a few dozen sets (ACCEL settings x the joints' directions)."""
+    constraint = _libs().constraint
+    vmax_a = np.array(vmax)
+    vel = constraint.JointVelocityConstraint(np.column_stack([-vmax_a, vmax_a]))
+    acc = constraint.JointAccelerationConstraint(
+        np.array(abounds), discretization_scheme=constraint.DiscretizationType.Interpolation
+    )
+    return vel, acc
+
+
 def accel_bounds(dq: np.ndarray, amax: np.ndarray, accel: float = 1.0, decel: float = 1.0) -> np.ndarray:
     """Per-joint (lower, upper) acceleration bounds for ACCEL accel, decel (fractions of the
     maximum): a joint moving by `dq` speeds up in the direction of dq and slows down against
@@ -154,18 +184,16 @@ def accel_bounds(dq: np.ndarray, amax: np.ndarray, accel: float = 1.0, decel: fl
 def _parametrize(ss: np.ndarray, waypoints: np.ndarray, vmax: np.ndarray, abounds: np.ndarray):
     """Time-optimal rest-to-rest s(t) along the spline through `waypoints`: (t, s, v, a).
     `abounds` is (dof, 2): lower and upper joint acceleration."""
-    path = ta.SplineInterpolator(ss, waypoints)
-    vel = constraint.JointVelocityConstraint(np.column_stack([-vmax, vmax]))
-    acc = constraint.JointAccelerationConstraint(
-        abounds, discretization_scheme=constraint.DiscretizationType.Interpolation
-    )
+    libs = _libs()
+    path = libs.toppra.SplineInterpolator(ss, waypoints)
+    vel, acc = _constraints(tuple(map(float, vmax)), tuple(map(tuple, np.asarray(abounds, float).tolist())))
     # Grid points closer together near both ends, where a motion speeds up and slows down:
     # a short acceleration phase spread over a few uniform cells comes out slow.
     grid = ss[0] + (ss[-1] - ss[0]) * 0.5 * (1.0 - np.cos(np.linspace(0.0, math.pi, N_GRID)))
     if len(ss) > 2:  # also put grid points on the waypoints, where the spline's curvature changes
         grid = np.sort(np.concatenate([grid, ss]))
         grid = grid[np.concatenate([[True], np.diff(grid) > 1e-9])]  # no cells of zero length
-    instance = algo.TOPPRA([vel, acc], path, gridpoints=grid, solver_wrapper="seidel",
+    instance = libs.algorithm.TOPPRA([vel, acc], path, gridpoints=grid, solver_wrapper="seidel",
                            parametrizer="ParametrizeConstAccel")
     out = instance.compute_trajectory(0.0, 0.0)
     if out is None:
@@ -175,7 +203,7 @@ def _parametrize(ss: np.ndarray, waypoints: np.ndarray, vmax: np.ndarray, abound
 
 def _trajectory(ss, waypoints_q, waypoints_all, vmax, abounds) -> Trajectory:
     t, s, v, a = _parametrize(ss, waypoints_all, vmax, abounds)
-    path = CubicSpline(ss, waypoints_q) if len(ss) > 2 else _Line(waypoints_q[0], waypoints_q[-1])
+    path = _libs().CubicSpline(ss, waypoints_q) if len(ss) > 2 else _Line(waypoints_q[0], waypoints_q[-1])
     dpath = path.derivative()
     q0, q1 = np.array(waypoints_q[0], dtype=float), np.array(waypoints_q[-1], dtype=float)
     return Trajectory(float(t[-1]), q0, q1, np.asarray(t, float), np.asarray(s, float), np.asarray(v, float),
@@ -313,7 +341,7 @@ def plan_straight_move(kin: RobotKinematics, q0, T1, vmax, amax, cart_speed_max,
             T[:3, 3] = p0 + ss[i] * (p1 - p0)
             Q[i] = kin.ik((T1 if i == n - 1 else T) @ untool, Q[i - 1], righty=config, continuous=True)
         # Deviation of the spline's tip path from the line, between the waypoints.
-        spline = CubicSpline(ss, Q)
+        spline = _libs().CubicSpline(ss, Q)
         probe = np.concatenate([(ss[:-1] + ss[1:]) / 2, ss[:-1] + (ss[1:] - ss[:-1]) / 4,
                                 ss[:-1] + 3 * (ss[1:] - ss[:-1]) / 4])
         deviation = float(np.max(_distance_to_segment(_tip_positions(kin, spline(probe), tool), p0, p1)))

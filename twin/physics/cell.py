@@ -84,8 +84,7 @@ class Cell:
         ctx.retire_regions = [c.name for c in self.components if c.section in ("bin", "tray")]
         self.parts = ctx.parts = PartPool(config.part, ctx)
         for component in self.components:
-            if hasattr(component, "reserve_parts"):
-                component.reserve_parts(self.parts)
+            component.reserve_parts(self.parts)
         self._build()
         self._bind()
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import types
 from pathlib import Path
 from typing import Annotated, Any, Literal, Union, get_args, get_origin
 
@@ -157,7 +158,10 @@ class Conveyor(Section):
     place: bool = False                 # releasing a part on it is a put-down
     encoder: Encoder | None = None
 
-    _direction = field_validator("direction")(lambda v: _nonzero(v))
+    @field_validator("direction")
+    @classmethod
+    def _direction(cls, v: list[float]) -> list[float]:
+        return _nonzero(v)
 
 
 class Source(Section):
@@ -438,7 +442,7 @@ def _unwrap(annotation: Any) -> Any:
         origin = get_origin(annotation)
         if origin is Annotated:
             annotation = get_args(annotation)[0]
-        elif origin is Union or (origin is not None and "UnionType" in type(annotation).__name__):
+        elif origin in (Union, types.UnionType):
             annotation = [a for a in get_args(annotation) if a is not type(None)][0]
         else:
             return annotation

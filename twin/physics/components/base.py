@@ -16,7 +16,9 @@ nothing when nothing changed (the defaults here do nothing):
   when the recorder takes a frame.
 
 ``derived_regions()`` may name regions the component defines by its geometry (a bin's
-inside, a tray, a belt) so that a scene need not repeat them under ``[regions]``.
+inside, a tray, a belt) so that a scene need not repeat them under ``[regions]``;
+``reserve_parts(pool)`` is where a feeder or source reserves its bodies in the part pool
+(before the build).
 
 To add a kind: a section model in `schema.py` (a field of `Scene`), a class here with
 ``section`` set, and one entry in `components.REGISTRY`.
@@ -89,6 +91,9 @@ class Component:
     def derived_regions(self) -> list[tuple[str, list[float], list[float], bool]]:
         """(name, lo mm, hi mm, place) of the regions this component defines."""
         return []
+
+    def reserve_parts(self, pool: "PartPool") -> None:
+        pass
 
     def build(self, spec: mujoco.MjSpec, ctx: CellContext) -> None:
         pass

@@ -71,6 +71,7 @@ class Robot(Component):
         self.robot_geom = robot_body[m.geom_bodyid]  # moving robot geoms, gripper included
         self._touching: set[tuple[int, int]] = set()
         self.collisions: list[dict] = []
+        self._gripper = ctx.by_kind["gripper"]["gripper"]
         self.kinematics = RobotKinematics.from_mjcf(self.model_path)
         self.payload_torque = np.zeros(len(self.dadr))  # set by the gripper while it holds a part
         self._jacp = np.zeros((3, m.nv))
@@ -128,8 +129,7 @@ class Robot(Component):
         d = self.data
         ncon = d.ncon
         touching: set[tuple[int, int]] = set()
-        parts = self.ctx.parts
-        gripper = self.ctx.by_kind["gripper"]["gripper"]
+        parts, gripper = self.ctx.parts, self._gripper
         if ncon:
             g = d.contact.geom[:ncon]
             robot = self.robot_geom[g]

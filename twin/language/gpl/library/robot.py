@@ -168,11 +168,6 @@ class Robot:
         robot_state(rt).payload = float(value)
 
     @shared
-    def RapidDecel(rt) -> bool:
-        """Reads False: a rapid stop is over once it has been asked for."""
-        return False
-
-    @shared
     def set_RapidDecel(rt, value) -> None:
         """True stops any motion in progress at once."""
         if value:
