@@ -39,3 +39,18 @@ class ClockEncoder:
             when = self._pending.pop(0)
             self.latches.append((when, self._count_at(when)))
         return self._count_at(t)
+
+
+class ClockConveyor:
+    """A straight belt for tests, as the cell's conveyors expose it to the controller:
+    `frame_world` (4x4, metres: the top face's centre, X along the travel) and `encoder`."""
+
+    def __init__(self, frame_world, encoder: ClockEncoder):
+        self.frame_world = frame_world
+        self.encoder = encoder
+
+
+def on_cell(cell, conveyors: dict[str, ClockConveyor]) -> None:
+    """Give a cell these belts (its `conveyors` and `encoders`)."""
+    cell.conveyors = conveyors
+    cell.encoders = {c.encoder.number: c.encoder for c in conveyors.values()}

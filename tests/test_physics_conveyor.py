@@ -362,3 +362,16 @@ mass = 0.04
     assert on_belt and all(abs(p["pose"][1] - 350.0) < 3.0 for p in on_belt)  # riding, not tumbling off
     assert cell.counts()["dropped"] == 0
 
+
+
+def test_a_program_may_declare_a_part_missed_but_not_one_it_picked():
+    cell = make_cell(one_part)
+    run_for(cell, 0.5)
+    (inst,) = cell.parts.instances
+    cell.mark_missed(inst["id"], "left the window")
+    cell.mark_missed(inst["id"], "left the window")  # once only
+    assert cell.counts()["missed"] == 1
+    assert [e["cause"] for e in cell.events if e["kind"] == "missed"] == ["left the window"]
+    inst["missed"], inst["picked"] = False, True
+    cell.mark_missed(inst["id"], "left the window")
+    assert cell.counts()["missed"] == 0

@@ -32,9 +32,9 @@ def test_vplus_run_wait_state_results(tmp_path):
 """)
     assert report.errors == []
     lines = report.output.splitlines()
-    assert lines[:5] == ["before 0", "running 1", "done 3", "count 1", "acquired 0"]
+    assert lines[:5] == ["before 0", "running 1", "done 3", "count 5", "acquired 0"]
     x, x2 = lines[5].split()[1:3]
-    assert x == x2 and 290 < float(x) < 310
+    assert x == x2 and 200 < float(x) < 400
 
 
 def test_vparameter_sets_what_the_tool_uses(tmp_path):
@@ -46,14 +46,14 @@ def test_vparameter_sets_what_the_tool_uses(tmp_path):
     TYPE "count ", VRESULT($ip, 1, 2, 1, 1310)
 """)
     assert report.errors == []
-    assert report.output.splitlines() == ["threshold 150", "count 0"]  # min_area above the part's
+    assert report.output.splitlines() == ["threshold 100", "count 0"]  # min_area above the parts'
 
 
 @pytest.mark.parametrize("body, code", [
     ('    TYPE VRESULT($ip, 1, 2, 1, 1310)\n', -3205),  # no run yet
     ('    VRUN $ip, 7\n', -3201),  # no such sequence
     ('    VRUN $ip, 1\n    VWAITI (1) $ip, 0\n    TYPE VRESULT($ip, 1, 9, 1, 1310)\n', -3202),
-    ('    VRUN $ip, 1\n    VWAITI (1) $ip, 0\n    SET p = VLOCATION($ip, 1, 2, 5, 1311)\n', -3204),
+    ('    VRUN $ip, 1\n    VWAITI (1) $ip, 0\n    SET p = VLOCATION($ip, 1, 2, 9, 1311)\n', -3204),
     ('    VRUN $ip, 1\n    TYPE VRESULT($ip, 1, 2, 1, 1310)\n', -3209),  # still running
     ('    VRUN $ip, 1\n    VWAITI (1) $ip, 0\n    TYPE VRESULT($ip, 1, 2, 1, 4242)\n', -407),
     ('    PARAMETER VTIMEOUT = 0.01\n    VRUN $ip, 1\n    VWAITI (1) $ip, 0\n', -3208),
@@ -89,13 +89,13 @@ def test_gpl_vision_and_visresult_members(tmp_path):
         vis.Process("Main")
         Console.WriteLine("status " & CStr(vis.Status) & " error " & CStr(vis.ErrorCode))
         Console.WriteLine("count " & CStr(vis.ResultCount("part1")))
-        r = vis.Result("part1", 1)
+        r = vis.Result("blobs", 1)
         Console.WriteLine("info " & CStr(r.InfoCount) & " " & Format(r.Info(1) - r.Loc.X, "0.000") & " type " & CStr(r.Type))
         Console.WriteLine("id " & CStr(r.ProcessID) & " error " & CStr(r.ErrorCode))
-        Console.WriteLine("threshold " & CStr(vis.ToolProperty("part1", "threshold")))
-        vis.ToolProperty("part1", "min_area") = 5000
+        Console.WriteLine("threshold " & CStr(vis.ToolProperty("blobs", "threshold")))
+        vis.ToolProperty("blobs", "min_area") = 5000
         vis.Process("Main")
-        Console.WriteLine("count " & CStr(vis.ResultCount("part1")) & " id " & CStr(vis.Result("part1", 1).ErrorCode))
+        Console.WriteLine("count " & CStr(vis.ResultCount("blobs")) & " id " & CStr(vis.Result("blobs", 1).ErrorCode))
         Console.WriteLine("system " & vis.ToolProperty("", "processes"))
         vis.Process("Nothing")
         Console.WriteLine("status " & CStr(vis.Status) & " error " & CStr(vis.ErrorCode))
@@ -104,7 +104,7 @@ def test_gpl_vision_and_visresult_members(tmp_path):
 """)
     assert report.errors == []
     assert report.output.splitlines() == [
-        "status 0", "status 3 error 0", "count 1", "info 7 0.000 type 0", "id 1 error 0", "threshold 150",
+        "status 0", "status 3 error 0", "count 5", "info 7 0.000 type 0", "id 1 error 0", "threshold 100",
         "count 0 id -3204", "system Main", "status 2 error -3201", "ip 192.168.0.50"]
 
 

@@ -264,10 +264,25 @@ def _discard_recording(started: StartedRun) -> None:
         recorder.path.unlink(missing_ok=True)
 
 
+def build_report(started: StartedRun, outcome) -> Report:
+    """The placement report of a run, so far or at its end."""
+    sim, system, program, scene = started.simulation, started.system, started.program, started.scene
+    events = [{"time": e.get("t"), **{k: v for k, v in e.items() if k != "t"}} for e in sim.cell.events]
+    parts = sim.cell.parts_report()
+    return Report(
+        program=str(program), scene=str(scene), seed=sim.cell.seed,
+        sim_time_s=round(outcome.sim_time_s, 6), wall_time_s=round(outcome.wall_time_s, 3),
+        output=system.console.output, errors=outcome.errors, parts=parts,
+        regions=sim.cell.region_counts(parts), events=events, cycle_times_s=cycle_times(events),
+        counts={**sim.cell.counts(parts), **(sim.vision.report_counts() if sim.vision is not None else {})},
+        components=sim.cell.components_report(),
+        interrupted=sim.interrupted,
+    )
+
+
 def finish_run(started: StartedRun, outcome) -> RunResult:
     """Close the recording, build the report (and write it when asked)."""
-    sim, system, program, scene, report_path = (started.simulation, started.system, started.program,
-                                                started.scene, started.report_path)
+    sim, system, report_path = started.simulation, started.system, started.report_path
     if isinstance(system, VPlusSystem):
         system.devices.close_network()  # a run stopped early still frees its ports
     if sim.vision is not None:
@@ -278,17 +293,7 @@ def finish_run(started: StartedRun, outcome) -> RunResult:
         if started.rrd_path is not None:
             replace_output(sim.recorder.path, started.rrd_path)
 
-    events = [{"time": e.get("t"), **{k: v for k, v in e.items() if k != "t"}} for e in sim.cell.events]
-    parts = sim.cell.parts_report()
-    report = Report(
-        program=str(program), scene=str(scene), seed=sim.cell.seed,
-        sim_time_s=round(outcome.sim_time_s, 6), wall_time_s=round(outcome.wall_time_s, 3),
-        output=system.console.output, errors=outcome.errors, parts=parts,
-        regions=sim.cell.region_counts(parts), events=events, cycle_times_s=cycle_times(events),
-        counts={**sim.cell.counts(parts), **(sim.vision.report_counts() if sim.vision is not None else {})},
-        components=sim.cell.components_report(),
-        interrupted=sim.interrupted,
-    )
+    report = build_report(started, outcome)
     if report_path is not None:
         report.write(report_path)
     return RunResult(report, sim)

@@ -71,6 +71,9 @@ class BeltPath:
             sigma = np.linspace(0.0, 1.0, len(p))
         self.sigma = sigma
         self.sigma_rate = np.gradient(sigma, dt) if len(sigma) > 1 else np.zeros(1)
+        # The planned motion starts and ends at rest: so does sigma (a one-sided difference
+        # at the last sample would leave a speed in the servos' velocity reference).
+        self.sigma_rate[0] = self.sigma_rate[-1] = 0.0
 
     def reference(self, k: int, q: np.ndarray, qd: np.ndarray, q_seed: np.ndarray,
                   lead_s: float) -> tuple[np.ndarray, np.ndarray]:

@@ -98,8 +98,11 @@ class PartPool(Component):
                 body.add_geom(name=f"part_{i}_geom", type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[r, h, 0], **shape)
                 half_z.append(h)
             else:
+                # Compiled as able to collide, so that MuJoCo builds the mesh's convex hull (it
+                # skips it for a mesh no colliding geom uses, and a hull-less mesh touches with
+                # one point: a plate on a face rocks and sinks); parked by `bind`.
                 body.add_geom(name=f"part_{i}_geom", type=mujoco.mjtGeom.mjGEOM_MESH,
-                              meshname=f"part_mesh_{tname}", **shape)
+                              meshname=f"part_mesh_{tname}", **{**shape, "contype": RETIRED_CONTYPE})
                 half_z.append(meshes[tname])
         self._half_z = np.array(half_z)
 
@@ -115,6 +118,7 @@ class PartPool(Component):
         self.geom = np.array([m.geom(f"part_{i}_geom").id for i in range(n)], dtype=int)
         self.qadr = np.array([m.jnt_qposadr[m.joint(f"part_{i}_free").id] for i in range(n)], dtype=int)
         self.dadr = np.array([m.jnt_dofadr[m.joint(f"part_{i}_free").id] for i in range(n)], dtype=int)
+        m.geom_contype[self.geom] = 0  # parked: no contacts (see the mesh geoms in `build`)
         self.geom_part = np.full(m.ngeom, -1, dtype=int)  # geom id -> body index
         self.geom_part[self.geom] = np.arange(n)
         self.state = np.zeros(n, dtype=int)

@@ -284,6 +284,26 @@ class CameraSection(Section):
         return self
 
 
+class Scatter(Section):
+    """[[scatter]] (twin/physics/scatter.py)."""
+    name: str
+    parts: Annotated[list[str], Field(min_length=1)]
+    count: Annotated[int, Field(ge=1, le=1000)]
+    area: Annotated[list[Finite], Field(min_length=4, max_length=4)]
+    mat: Annotated[list[Finite], Field(min_length=4, max_length=4)]
+    mat_height: Positive = 2.0
+    min_distance: NonNegative = 60.0
+    upside_down: Annotated[float, Field(ge=0, le=1)] = 0.0
+
+    @model_validator(mode="after")
+    def _boxes(self) -> "Scatter":
+        for key in ("area", "mat"):
+            x0, y0, x1, y1 = getattr(self, key)
+            if not (x0 < x1 and y0 < y1):
+                raise ValueError(f"{key}: [x lo, y lo, x hi, y hi] with lo below hi")
+        return self
+
+
 class Vision(Section):
     """[vision]: twin/vision/process.py checks the processes and names the process and
     tool of a mistake."""
@@ -316,6 +336,7 @@ class Scene(Section):
     sensor: list[Sensor] = []
     bin: list[Bin] = []
     tray: list[Tray] = []
+    scatter: list[Scatter] = []
     camera: list[CameraSection] = []
     vision: Vision | None = None
     regions: dict[str, Region] = {}
@@ -328,7 +349,7 @@ class Scene(Section):
                              f" (has: {', '.join(self.locations) or 'none'})")
         kinds = {"part": self.part, "feeder": self.feeder, "conveyor": self.conveyor,
                  "source": self.source, "sensor": self.sensor, "bin": self.bin, "tray": self.tray,
-                 "camera": self.camera}
+                 "camera": self.camera, "scatter": self.scatter}
         for kind, items in kinds.items():
             names = [c.name for c in items]
             for i, name in enumerate(names):
@@ -341,6 +362,9 @@ class Scene(Section):
             raise ValueError("conveyor[*].encoder.number: each encoder needs its own number")
         for i, f in enumerate(self.feeder):
             _known(f"feeder[{i}].part", f.part, parts, "[[part]]")
+        for i, sc in enumerate(self.scatter):
+            for j, p in enumerate(sc.parts):
+                _known(f"scatter[{i}].parts[{j}]", p, parts, "[[part]]")
         for i, s in enumerate(self.source):
             _known(f"source[{i}].conveyor", s.conveyor, list(conveyors), "[[conveyor]]")
             for j, p in enumerate(s.parts or []):

@@ -121,7 +121,7 @@ class Camera:
         if c.noise == 0.0:
             return rgb
         rng = np.random.default_rng([int(c.seed), self.frames])
-        out = rgb.astype(np.float32) + rng.normal(0.0, float(c.noise), rgb.shape).astype(np.float32)
+        out = rgb.astype(np.float32) + rng.standard_normal(rgb.shape, dtype=np.float32) * np.float32(c.noise)
         return np.clip(np.rint(out), 0, 255).astype(np.uint8)
 
     def close(self) -> None:

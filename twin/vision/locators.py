@@ -111,6 +111,9 @@ def _sorted(found: list[Instance], key: str) -> list[Instance]:
     return sorted(found, key=lambda i: (getattr(i, key), i.x, i.y), reverse=reverse)
 
 
+NEAR_MM = 6.0  # a pattern searched near another tool's instance: how far its origin may be
+
+
 @dataclass
 class PatternLocator:
     outline: list[list[float]]  # the part's outline, mm, in its own frame (x along the part)
@@ -123,8 +126,9 @@ class PatternLocator:
     name: str = "pattern"
     _models: dict = field(default_factory=dict, repr=False)
 
-    def _model(self, scale: float, angle: float, mirrored: bool) -> np.ndarray:
-        """The outline drawn filled (anti-aliased) at ``scale`` mm/pixel, turned by angle."""
+    def _model(self, scale: float, angle: float, mirrored: bool, cache: bool = False) -> np.ndarray:
+        """The outline drawn filled (anti-aliased) at ``scale`` mm/pixel, turned by angle;
+        the coarse search's angles are kept (``cache``), refined ones drawn each time."""
         key = (scale, round(angle, 6), mirrored)
         if key not in self._models:
             poly = np.array(self.outline, dtype=np.float64)
@@ -140,11 +144,13 @@ class PatternLocator:
             shift = 4  # fixed-point bits of cv2.fillPoly
             cv2.fillPoly(img, [np.round((pts + centre) * (1 << shift)).astype(np.int32)], 255,
                          lineType=cv2.LINE_AA, shift=shift)
+            if not cache:
+                return img
             self._models[key] = img
         return self._models[key]
 
-    def _scores(self, image: np.ndarray, scale: float, angle: float, mirrored: bool) -> np.ndarray:
-        model = self._model(scale, angle, mirrored)
+    def _scores(self, image: np.ndarray, scale: float, angle: float, mirrored: bool, cache: bool = False) -> np.ndarray:
+        model = self._model(scale, angle, mirrored, cache)
         if image.shape[0] < model.shape[0] or image.shape[1] < model.shape[1]:
             return np.full((1, 1), -1.0, np.float32)
         return cv2.matchTemplate(image, model, cv2.TM_CCOEFF_NORMED)
@@ -157,10 +163,10 @@ class PatternLocator:
             found = [f for f in (self._refine(view, image, c) for c in candidates) if f.score >= self.min_score]
             return _sorted(found[:self.max_instances], self.sort)
         out = []
-        half = self._model(view.scale, 0.0, False).shape[0] // 2
+        half = self._model(view.scale, 0.0, False, cache=True).shape[0] // 2
         for inst in near:
             c, r = int(round((inst.x - view.lo[0]) / view.scale)), int(round((inst.y - view.lo[1]) / view.scale))
-            pad = 2 * half + 8
+            pad = half + int(round(NEAR_MM / view.scale))  # the model's origin within NEAR_MM of the instance
             r0, c0 = max(0, r - pad), max(0, c - pad)
             roi = image[r0:r + pad + 1, c0:c + pad + 1]
             candidates = self._coarse(view, roi)[:1]
@@ -180,7 +186,7 @@ class PatternLocator:
         best_score, best_angle, best_mirror = None, None, None
         for mirrored in ((False, True) if self.mirror else (False,)):
             for angle in np.arange(0.0, 360.0, self.coarse_step):
-                s = self._scores(small, scale, angle, mirrored)
+                s = self._scores(small, scale, angle, mirrored, cache=True)
                 if best_score is None:
                     best_score = s.copy()
                     best_angle = np.full(s.shape, angle)
@@ -195,7 +201,7 @@ class PatternLocator:
         dilated = cv2.dilate(best_score, np.ones((2 * radius + 1, 2 * radius + 1), np.uint8))
         rows, cols = np.nonzero((best_score >= dilated) & (best_score >= self.min_score * 0.8))
         order = np.argsort(-best_score[rows, cols])[: self.max_instances * 2]
-        half = self._model(scale, 0.0, False).shape[0] // 2
+        half = self._model(scale, 0.0, False, cache=True).shape[0] // 2
         return [(np.array([cols[i] + half, rows[i] + half], float) * k, float(best_angle[rows[i], cols[i]]),
                  bool(best_mirror[rows[i], cols[i]])) for i in order]
 
@@ -203,7 +209,7 @@ class PatternLocator:
         """Best angle (steps of coarse/6, then a parabola) and position (parabola) near a
         candidate, on the full view."""
         centre, start, mirrored = candidate
-        model_half = self._model(view.scale, 0.0, mirrored).shape[0] // 2
+        model_half = self._model(view.scale, 0.0, mirrored, cache=True).shape[0] // 2
         pad = search_px if search_px is not None else int(self.coarse_scale / view.scale) * 3 + 2
         r0 = int(round(centre[1])) - model_half - pad
         c0 = int(round(centre[0])) - model_half - pad

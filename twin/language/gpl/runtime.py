@@ -30,6 +30,7 @@ from .errors import (
 )
 from . import library as library_package
 from .library import CLASSES, Ref, member as library_member
+from .library.codes import mapped_from_controller
 from .parser import parse, parse_file
 from .project import read_project
 
@@ -319,6 +320,9 @@ def as_gpl_error(err: BaseException) -> GplError | None:
     if isinstance(err, GplError):
         return err
     if isinstance(err, ProgramError):  # raised by the shared controller / I/O (V+ codes)
+        mapped = mapped_from_controller(err)
+        if mapped is not None:
+            return mapped
         return GplError(err.code if err.code is not None else INVALID_ARGUMENT, err.message)
     if isinstance(err, ZeroDivisionError):
         return fail(DIVIDE_BY_ZERO)

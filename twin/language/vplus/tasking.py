@@ -382,11 +382,12 @@ class TaskControl:
 
     def current_step(self) -> tuple[str, int] | None:
         """(program, step) of the innermost V+ step this task is at, if running."""
-        where = self._innermost_statement()
+        where = self.current_statement()
         return None if where is None else (where[0].name, where[1].step)
 
-    def _innermost_statement(self):
-        """(compiled program, statement) of the innermost V+ step this task is at, if running."""
+    def current_statement(self):
+        """(compiled program, statement) of the innermost V+ step this task is at, if running
+        (the statement has the source line: the notebook API and the recording's line trace)."""
         if self.finished or not self.levels:
             return None
         where = None
@@ -407,7 +408,7 @@ class TaskControl:
 
     def current_location(self) -> dict | None:
         """Where the task is, for the watchdog's message: program, step, file, line, source."""
-        where = self._innermost_statement()
+        where = self.current_statement()
         if where is None:
             return None
         compiled, statement = where

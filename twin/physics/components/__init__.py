@@ -23,6 +23,12 @@ def _camera(config, ctx: CellContext) -> Component:
     return Camera(config, ctx)
 
 
+def _scatter(config, ctx: CellContext) -> Component:
+    from ..scatter import Scatter  # as for the camera
+
+    return Scatter(config, ctx)
+
+
 REGISTRY = {
     "robot": Robot,
     "gripper": make_gripper,
@@ -33,6 +39,7 @@ REGISTRY = {
     "sensor": make_sensor,
     "bin": Bin,
     "tray": Tray,
+    "scatter": _scatter,
     "camera": _camera,
 }
 

@@ -32,6 +32,9 @@ from .robot import Robot
 
 GRASP_WINDOW_S = 0.3  # s after a close command during which a finger grasp may engage
 SLIP_GRACE_S = 0.05  # s after a grasp before slip is checked (grip force builds up)
+# s between updates of the joint torques that carry a held part's weight (they change with
+# the posture only on axes that are not vertical: not at all on a SCARA or a gantry)
+CARRY_UPDATE_S = 0.1
 RELEASE_GRACE_S = 0.5  # s after the gripper lets go of a part during which it may still touch it
 CUP_SEAL = 0.001  # m: the cup seals on a part this close to its face
 SEAL_SEARCH = 0.1  # m: parts whose centre is this near the cup are tested
@@ -50,6 +53,7 @@ class WeldGripper(Component):
         self.held: int | None = None  # body index of the held part
         self._held_since = 0.0
         self._released: tuple[int, float] = (-1, -1.0)
+        self._carried_at = -1.0
         self.closed = False
 
     def build(self, spec: mujoco.MjSpec, ctx: CellContext) -> None:
@@ -99,10 +103,14 @@ class WeldGripper(Component):
         d.eq_active[eq] = 1
         self.held = i
         self._held_since = self.time
-        self._robot.carry(int(b2), int(b1))
+        self._carry(i)
         self.parts.mark_picked(i)
         self.ctx.event("grasp", part=int(self.parts.instance_of[i]), where=self.ctx.regions.region_of(p2))
         self._check_payload(i)
+
+    def _carry(self, i: int) -> None:
+        self._robot.carry(int(self.parts.body[i]), self._palm)
+        self._carried_at = self.time
 
     def _check_payload(self, i: int) -> None:
         """A part heavier than the robot's maximum payload (the model's `payload` numeric) is
@@ -141,7 +149,8 @@ class WeldGripper(Component):
 
     def _check_slip(self) -> None:
         i = self.held
-        self._robot.carry(int(self.parts.body[i]), self._palm)  # the arm's posture changed
+        if self.time >= self._carried_at + CARRY_UPDATE_S:  # the arm's posture changed
+            self._carry(i)
         capacity = self.capacity(i)
         force = self.load(i)
         if force > capacity:

@@ -83,6 +83,12 @@ def from_controller(err) -> GplError:
     return fail(code, detail) if detail != code[1] else fail(code)
 
 
+def mapped_from_controller(err) -> GplError | None:
+    """The GPL error for a controller error that GPL numbers its own way (a window
+    violation the robot raised by itself, thrown into the thread); None for the others."""
+    return from_controller(err) if err.code in _FROM_VPLUS else None
+
+
 def unsupported(qualified_name: str, why: str) -> staticmethod:
     """A shared member the twin cannot offer: it raises -3103 saying why."""
 

@@ -9,7 +9,7 @@ Decisions (docs/gpl.md, "Conveyor tracking"):
   centre of the belt's top face, X along the travel, in the robot's world (Robot.Base
   applied).  ConveyorOffset is the belt position (mm) at which the frame is nominal.
 * Its limits (Location.ConveyorLimit, the tracking window) are the stretch of the belt
-  the arm can reach with the tool pointing down at the belt's surface.
+  the arm can reach with the tool pointing down (its floor plan at the arm's height).
 """
 
 from __future__ import annotations
@@ -27,7 +27,6 @@ from .state import check_robot, robot_state
 ARM = 1
 REACH_STEP_MM = 5.0  # sampling of the belt line for the reachable stretch
 REACH_SPAN_MM = 3000.0  # searched each side of the belt frame's origin
-TOOL_DOWN = trans(0.0, 0.0, 0.0, 0.0, 180.0, 0.0)
 
 
 def encoder_of(rt, robot):
@@ -52,11 +51,12 @@ def _reachable(rt, nominal: Location) -> BeltWindow:
     if key in cached:
         return cached[key]
     kin, robot = rt.robot.kin, rt.robot
+    height = kin.fk(robot.q_command)[2, 3] * 1000.0  # reach across the floor plan, at the arm's height now
     inside = []
     for x in np.arange(-REACH_SPAN_MM, REACH_SPAN_MM + REACH_STEP_MM, REACH_STEP_MM):
-        point = nominal * trans(float(x)) * TOOL_DOWN
+        x_mm, y_mm, _ = (nominal * trans(float(x))).position()
         try:
-            kin.ik(robot._flange_matrix_m(Location(*point.position(), 0.0, 180.0, 0.0)), robot.q_command)
+            kin.ik(robot._flange_matrix_m(Location(x_mm, y_mm, height, 0.0, 180.0, 0.0)), robot.q_command)
         except KinematicsError:
             continue
         inside.append(float(x))

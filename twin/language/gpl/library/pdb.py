@@ -18,6 +18,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
+import numpy as np
+
 from . import codes
 from .args import integer, number, text
 from .state import check_robot, robot_state
@@ -52,6 +54,17 @@ def _soft_limits(which: int) -> Callable[[Any], list]:
     return limits
 
 
+def _mounted_tool(rt) -> list:
+    """The restart tool of the gripper the cell mounts: its TCP in the flange frame (mm), as
+    the integrator configures the controller for its tool; none (zeros) without a cell."""
+    cell = getattr(rt.robot, "cell", None)
+    if cell is None or not hasattr(cell, "tcp_position"):
+        return [0.0] * 6
+    flange = cell.robot_base_pose() @ rt.robot.kin.fk(cell.robot_qpos())
+    tcp = np.linalg.solve(flange, np.append(cell.tcp_position(), 1.0))[:3] * 1000.0
+    return [float(v) for v in np.round(tcp, 3)] + [0.0, 0.0, 0.0]
+
+
 # DataID -> entry.  Sources: "manual Lnnn" (gpl-user-manual.txt), "PDB" (the public Parameter
 # Database reference, www2.brooksautomation.com/Controller_Software/Software_Reference/PDB),
 # "Dictionary" (the GPL Dictionary page of Controller.PDb).
@@ -70,7 +83,7 @@ TABLE: dict[int, Entry] = {
     2002: Entry("Robot Name", "str", 1, _const("Robot 1"), robot=True),  # PDB
     2003: Entry("Axis Mask", "int", 1, lambda rt: [(1 << _axes(rt)) - 1], READ_ONLY, robot=True),  # PDB
     16000: Entry("Robot serial number", "str", 1, _const("TWIN-0001"), robot=True),  # PDB
-    16051: Entry("Tool set at restart", "num", 6, _const(*[0.0] * 6), robot=True),  # PDB
+    16051: Entry("Tool set at restart", "num", 6, _mounted_tool, robot=True),  # PDB; the cell's gripper
     16052: Entry("Base set at restart", "num", 6, _const(*[0.0] * 6), robot=True),  # PDB
     16077: Entry("Joint maximum soft stop limits", "num", 0, _soft_limits(+1), READ_ONLY, robot=True),  # Dictionary
 }
