@@ -87,6 +87,16 @@ class WeldGripper(Component):
     def tcp_position(self) -> np.ndarray:
         return self.data.site_xpos[self._tcp].copy()
 
+    @property
+    def tcp_site(self) -> int:
+        """The MuJoCo site id of the tool tip (the recording draws its path)."""
+        return self._tcp
+
+    def record(self, recorder, t: float) -> None:
+        """At a recording frame: closed (0/1) and the grip force on the held part (N)."""
+        recorder.log_scalar("gripper/closed", t, float(self.closed))
+        recorder.log_scalar("gripper/force_n", t, float(self.load(self.held)) if self.held is not None else 0.0)
+
     # ------------------------------------------------------------------ weld
     def _engage(self, i: int) -> None:
         """Weld part i to the gripper at their current relative pose."""
