@@ -6,6 +6,7 @@
     twin check REPORT --expect EXPECT.toml [--junit FILE.xml]
     twin serve PROGRAM|PROJECT_DIR [--scene SCENE] [--fast] [--viewer] [--report R.json] ...
     twin calibrate SCENE [--camera NAME]
+    twin sweep SCENE PROGRAM --seeds N [--param KEY=V1,V2,...] [--workers K] [--ray ADDRESS] [--out DIR]
 
 A user's mistake (bad syntax, an unreachable location, a missing file) is
 printed as the controller would print it, with file and line, and never as a
@@ -303,6 +304,33 @@ def _run_seeds(args: argparse.Namespace, expect: dict | None) -> int:
     return 1 if any(o.failures for o in outcomes) else 0
 
 
+def _sweep(args: argparse.Namespace) -> int:
+    from .check import ExpectError, load_expect
+    from .sweep import cases, parse_param, run_sweep, summarise, write_summary
+
+    try:
+        params = [parse_param(p) for p in args.param]
+        expect = load_expect(args.expect) if args.expect else None
+    except (ValueError, ExpectError) as e:
+        print(f"twin sweep: error: {e}", file=sys.stderr)
+        return 2
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        print(f"twin sweep: error: --out {out}: not a folder", file=sys.stderr)
+        return 2
+    all_cases = cases(list(range(args.first_seed, args.first_seed + args.seeds)), params)
+    try:
+        rows = run_sweep(args.program, args.scene, all_cases, out, main=args.main, max_sim_time=args.max_sim_time,
+                         expect=expect, workers=args.workers, ray_address=args.ray)
+    except ProgramError as err:
+        print(f"twin sweep: error: {err}", file=sys.stderr)
+        return 2
+    json_path, csv_path = write_summary(rows, out)
+    print(summarise(rows), file=sys.stderr)
+    print(f"twin sweep: summary in {json_path} and {csv_path}", file=sys.stderr)
+    return 1 if any(r["status"] == "fail" for r in rows) else 0
+
+
 def _port_pair(text: str) -> tuple[int, int]:
     program, sep, real = text.partition("=")
     try:
@@ -396,6 +424,25 @@ def build_parser() -> argparse.ArgumentParser:
                        help="listen on loopback port REAL where the program asks for PROGRAM (0: any free "
                        "port; the ports used are printed); may be repeated")
     serve.set_defaults(handler=_serve)
+
+    sweep = sub.add_parser("sweep", help="run a program over seeds and scene parameters, in parallel processes "
+                           "or on a Ray cluster, and summarise")
+    sweep.add_argument("scene", help="cell description")
+    sweep.add_argument("program", nargs="+", help="V+ program files or a GPL project folder (as for twin run)")
+    sweep.add_argument("--seeds", type=_positive_int, default=1, metavar="N", help="seeds per parameter set")
+    sweep.add_argument("--first-seed", type=int, default=0, metavar="S", help="the first seed (default 0)")
+    sweep.add_argument("--param", action="append", default=[], metavar="KEY=V1,V2,...",
+                       help="scene value by dotted key (controller.monitor_speed=50,100; an array of tables "
+                       "by name or index: conveyor.infeed.speed=80,100); every combination is run; may be repeated")
+    sweep.add_argument("--workers", type=_positive_int, default=None, metavar="K",
+                       help="local processes (default: one per core)")
+    sweep.add_argument("--ray", default=None, metavar="ADDRESS",
+                       help="run on a Ray cluster instead (auto, host:port, or local); needs twin[ray]")
+    sweep.add_argument("--out", default="sweep-out", help="folder for the per-run reports and the summary")
+    sweep.add_argument("--main", default=None, help="program to execute (as for twin run)")
+    sweep.add_argument("--max-sim-time", type=float, default=3600.0, help="stop each run after this many simulated seconds")
+    sweep.add_argument("--expect", default=None, help="expectations every run must meet (as for twin check)")
+    sweep.set_defaults(handler=_sweep)
 
     check = sub.add_parser("check", help="check a report against expectations")
     check.add_argument("report")

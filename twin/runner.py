@@ -130,11 +130,11 @@ class StartedRun:
     rrd_path: str | Path | None = None  # where the recording goes when the run is over
 
 
-def _load_cell(scene: Path, seed: int | None) -> Simulation:
+def _load_cell(scene: Path, seed: int | None, overrides=None) -> Simulation:
     """The cell of `scene`; a scene the loader cannot use is the user's error (exit 2), with
     the loader's own words (a missing key, a wrong value, a broken model file)."""
     try:
-        return Simulation(scene, seed=seed)
+        return Simulation(scene, seed=seed, overrides=overrides)
     except KeyError as err:
         raise ProgramError(f"{scene}: scene lacks the key {err}", file=str(scene)) from None
     except (ValueError, TypeError, IndexError, OSError) as err:
@@ -157,6 +157,7 @@ def run_program(
     no_progress_limit: float | None = None,
     spawn: bool = False,
     connect: str | None = None,
+    scene_overrides: dict[str, object] | None = None,
 ) -> RunResult:
     """Load the cell, load and start the program (a V+ file or a GPL project
     folder, or several V+ files loaded together), simulate, report.
@@ -168,7 +169,8 @@ def run_program(
     `spawn`: also stream to a Rerun viewer started for the run; `connect`: to the viewer (or
     server) at this gRPC address, e.g. rerun+http://127.0.0.1:9876/proxy.
     `max_wall_time`, `no_progress_limit` (over the scene's [controller] no_progress_s; 0:
-    none): the watchdog's limits (twin.controller.watchdog)."""
+    none): the watchdog's limits (twin.controller.watchdog).
+    `scene_overrides`: scene values by dotted key (`twin sweep --param`)."""
     # From the start: a signal while the cell loads stops the run before its first cycle;
     # and on, while the recording and the report are written.
     with _stop_on_signals(handle_signals) as stop:
@@ -176,7 +178,8 @@ def run_program(
         if spawn or connect is not None:
             def viewer(sim: Simulation):
                 return _open_recorder(sim, rrd_path, spawn=spawn, connect=connect)
-        started = start_program(program, scene, main, report_path, rrd_path, seed, console, recorder=viewer)
+        started = start_program(program, scene, main, report_path, rrd_path, seed, console, recorder=viewer,
+                                scene_overrides=scene_overrides)
         sim = started.simulation
         sim.stop = stop
         if no_progress_limit is not None:
@@ -229,9 +232,10 @@ def _progress(sim: Simulation, enabled: bool):
 
 def start_program(program: str | Path | list[str | Path], scene: str | Path | None = None, main: str | None = None,
                   report_path: str | Path | None = None, rrd_path: str | Path | None = None,
-                  seed: int | None = None, console: Console | None = None, recorder=None) -> StartedRun:
+                  seed: int | None = None, console: Console | None = None, recorder=None,
+                  scene_overrides: dict[str, object] | None = None) -> StartedRun:
     """Load the cell and the program and start it (`recorder`: one already made, as
-    `twin serve` makes for a live viewer)."""
+    `twin serve` makes for a live viewer; `scene_overrides` as in `run_program`)."""
     # as given, else the bundled file of that name; several V+ files are loaded together
     programs = [find_user_file(p) for p in ([program] if isinstance(program, (str, Path)) else program)]
     program = programs[0]
@@ -244,7 +248,7 @@ def start_program(program: str | Path | list[str | Path], scene: str | Path | No
     if not scene.exists():
         raise ProgramError(f"{scene}: no such scene file", file=str(scene))
 
-    sim = _load_cell(scene, seed)
+    sim = _load_cell(scene, seed, scene_overrides)
     sandbox = _sandbox(program, report_path or rrd_path)
     try:
         check_root(sandbox)

@@ -42,10 +42,11 @@ class RunOutcome:
 class Simulation:
     """A loaded cell with its robot controller, I/O and task scheduler."""
 
-    def __init__(self, scene: str | Path = DEFAULT_SCENE, seed: int | None = None, recorder=None):
+    def __init__(self, scene: str | Path = DEFAULT_SCENE, seed: int | None = None, recorder=None,
+                 overrides: dict[str, object] | None = None):
         self.scene_path = Path(scene)
         self.io = DigitalIO()  # the controller's signals; the cell's components read and drive them
-        self.cell = Cell.from_scene(self.scene_path, seed=seed, io=self.io)
+        self.cell = Cell.from_scene(self.scene_path, seed=seed, io=self.io, overrides=overrides)
         self.kinematics = self.cell.kinematics
         controller_cfg = self.cell.scene.get("controller", {})
         settings = MotionSettings(
