@@ -72,9 +72,9 @@ class PartPool(Component):
         self.sleep = ctx.scene.physics.sleep
         meshes: dict[str, float] = {}
         half_z = []
-        for name, t in self.types.items():
+        for k, (name, t) in enumerate(self.types.items()):
             if t.shape == "mesh":
-                mesh = trimesh.load(str(resolve(t.mesh, ctx.scene_path, f"part {name} mesh")), force="mesh")
+                mesh = trimesh.load(str(resolve(t.mesh, ctx.scene_path, f"part[{k}].mesh")), force="mesh")
                 v = np.asarray(mesh.vertices, dtype=float) / MM
                 v -= (v.min(axis=0) + v.max(axis=0)) / 2  # origin at the bounding box centre
                 spec.add_mesh(name=f"part_mesh_{name}", uservert=v.flatten(),
