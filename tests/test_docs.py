@@ -2,7 +2,8 @@
 
 Every line that starts with `$ ` inside a ```console block of these pages is run, in order,
 in a scratch directory holding a copy of examples/ (the scenes and programs the commands
-name are the bundled ones, found from any directory), and must exit 0.
+name are the bundled ones, found from any directory), and must exit 0.  The ```python
+blocks of docs/notebooks.md run in order as one script, as a notebook user would type them.
 """
 
 from __future__ import annotations
@@ -37,3 +38,15 @@ def test_the_commands_of_a_docs_page_run(name, tmp_path):
     for command in found:
         run = subprocess.run(command, shell=True, cwd=tmp_path, env=env, capture_output=True, text=True)
         assert run.returncode == 0, f"{name}: `{command}` exited {run.returncode}:\n{run.stdout}\n{run.stderr}"
+
+
+def test_the_python_of_the_notebook_page_runs(tmp_path):
+    page = ROOT / "docs" / "notebooks.md"
+    script = "\n".join(re.findall(r"```python\n(.*?)```", page.read_text(), re.S))
+    (tmp_path / "page.py").write_text(script)
+    env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
+    run = subprocess.run([sys.executable, "page.py"], cwd=tmp_path, env=env, capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    lines = run.stdout.splitlines()
+    assert lines[0] == "time" and abs(float(lines[2]) - 50.8) < 1e-4   # height2, a V+ real (single precision)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["page.py"]

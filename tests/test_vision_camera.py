@@ -6,11 +6,14 @@ import math
 
 import cv2
 import mujoco
-import numpy as np
-import pytest
 from dataclasses import replace
 
-from twin.physics.camera import CameraConfig
+import numpy as np
+import pytest
+
+from conftest import ROOT
+from twin.physics.camera import CameraConfig, cameras_of
+from twin.physics.cell import Cell
 from twin.vision.calibration import find_target
 from twin.vision.camera import Camera
 from vision_helpers import CAMERA, PLATE_HEIGHT, build_bench, plate_layout
@@ -78,3 +81,32 @@ def test_camera_settings_are_checked():
     with pytest.raises(ValueError, match="focal_px or fov_deg"):
         CameraConfig.from_table({"name": "c"})
     assert CameraConfig.from_table({"name": "c", "fov_deg": 60.0}).focal == pytest.approx(240 / math.tan(math.radians(30)))
+
+
+def test_a_camera_on_the_robot_moves_with_it(tmp_path):
+    """A camera mounted on the Cobra's outer link: its model camera follows the link, and
+    what it sees changes when the arm turns."""
+    scene = tmp_path / "arm.toml"
+    scene.write_text((ROOT / "scenes" / "scara_vision.toml").read_text() + """
+[[camera]]
+name = "arm"
+resolution = [320, 240]
+fov_deg = 60.0
+mount = "link2"
+pose = [275.0, 0.0, -60.0, 0.0, 180.0, 0.0]
+""")
+    cell = Cell.from_scene(scene)
+    m, d = cell.model, cell.data
+    cam, link = m.camera("camera/arm").id, m.body("link2").id
+    camera = Camera(next(c for c in cameras_of(cell) if c.name == "arm"), m)
+
+    def offset_mm() -> np.ndarray:
+        return d.xmat[link].reshape(3, 3).T @ (d.cam_xpos[cam] - d.xpos[link]) * 1000
+
+    before = camera.shoot(d).rgb
+    assert np.allclose(offset_mm(), [275.0, 0.0, -60.0], atol=1e-6)
+    d.qpos[m.jnt_qposadr[m.joint("j1").id]] += 0.5
+    mujoco.mj_forward(m, d)
+    assert np.allclose(offset_mm(), [275.0, 0.0, -60.0], atol=1e-6)
+    assert not np.array_equal(before, camera.shoot(d).rgb)
+    camera.close()

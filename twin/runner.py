@@ -202,21 +202,12 @@ def start_program(program: str | Path | list[str | Path], scene: str | Path | No
     return StartedRun(program, scene, sim, system, report_path)
 
 
-def finish_run(started: StartedRun, outcome) -> RunResult:
-    """Close the recording, build the report (and write it when asked)."""
-    sim, system, program, scene, report_path = (started.simulation, started.system, started.program,
-                                                started.scene, started.report_path)
-    if isinstance(system, VPlusSystem):
-        system.devices.close_network()  # a run stopped early still frees its ports
-    if sim.vision is not None:
-        sim.vision.close()  # its port and renderers
-    if sim.recorder is not None:
-        sim.recorder.log_text(sim.cell.time, system.console.output or "(no output)")
-        sim.recorder.close()
-
+def build_report(started: StartedRun, outcome) -> Report:
+    """The placement report of a run, so far or at its end."""
+    sim, system, program, scene = started.simulation, started.system, started.program, started.scene
     events = [{"time": e.get("t"), **{k: v for k, v in e.items() if k != "t"}} for e in sim.cell.events]
     parts = sim.cell.parts_report()
-    report = Report(
+    return Report(
         program=str(program), scene=str(scene), seed=sim.cell.seed,
         sim_time_s=round(outcome.sim_time_s, 6), wall_time_s=round(outcome.wall_time_s, 3),
         output=system.console.output, errors=outcome.errors, parts=parts,
@@ -225,6 +216,20 @@ def finish_run(started: StartedRun, outcome) -> RunResult:
         components=sim.cell.components_report(),
         interrupted=sim.interrupted,
     )
+
+
+def finish_run(started: StartedRun, outcome) -> RunResult:
+    """Close the recording, build the report (and write it when asked)."""
+    sim, system, report_path = started.simulation, started.system, started.report_path
+    if isinstance(system, VPlusSystem):
+        system.devices.close_network()  # a run stopped early still frees its ports
+    if sim.vision is not None:
+        sim.vision.close()  # its port and renderers
+    if sim.recorder is not None:
+        sim.recorder.log_text(sim.cell.time, system.console.output or "(no output)")
+        sim.recorder.close()
+
+    report = build_report(started, outcome)
     if report_path is not None:
         report.write(report_path)
     return RunResult(report, sim)

@@ -382,6 +382,12 @@ class TaskControl:
 
     def current_step(self) -> tuple[str, int] | None:
         """(program, step) of the innermost V+ step this task is at, if running."""
+        where = self.current_statement()
+        return None if where is None else (where[0].name, where[1].step)
+
+    def current_statement(self):
+        """(compiled program, statement) of the innermost V+ step this task is at, if running
+        (the statement has the source line: the notebook API and the recording's line trace)."""
         if self.finished or not self.levels:
             return None
         where = None
@@ -392,7 +398,7 @@ class TaskControl:
                 compiled = self.system.programs[frame.f_code.co_filename[7:-1]]
                 statement = compiled.line_map.get(frame.f_lineno)
                 if statement is not None:
-                    where = (compiled.name, statement.step)
+                    where = (compiled, statement)
             generator = getattr(generator, "gi_yieldfrom", None)
         return where
 
