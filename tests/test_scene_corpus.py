@@ -326,6 +326,23 @@ def _paths(value, prefix=()):
 _KEY_PATHS = list(_paths(_BASE))
 
 
+def _has(node, key) -> bool:
+    return (isinstance(node, dict) and isinstance(key, str)) or (
+        isinstance(node, list) and isinstance(key, int) and key < len(node))
+
+
+def _put(scene: dict, path: tuple, value) -> None:
+    """scene[path] = value where the path still leads somewhere (an earlier edit may
+    have replaced a table by a number)."""
+    node = scene
+    for key in path[:-1]:
+        if not _has(node, key) or key not in (node if isinstance(node, dict) else range(len(node))):
+            return
+        node = node[key]
+    if _has(node, path[-1]):
+        node[path[-1]] = value
+
+
 @settings(max_examples=300, derandomize=True, deadline=None, suppress_health_check=list(HealthCheck))
 @given(st.lists(st.tuples(st.sampled_from(_KEY_PATHS), _VALUES), min_size=1, max_size=4))
 def test_fuzzed_scenes_load_or_raise_scene_error(edits):
@@ -333,15 +350,7 @@ def test_fuzzed_scenes_load_or_raise_scene_error(edits):
     the scene or raises SceneError, nothing else."""
     scene = copy.deepcopy(_BASE)
     for path, value in edits:
-        node = scene
-        for key in path[:-1]:
-            if not isinstance(node, (dict, list)) or (isinstance(node, list) and key >= len(node)) or \
-                    (isinstance(node, dict) and key not in node):
-                break
-            node = node[key]
-        else:
-            if isinstance(node, dict) or (isinstance(node, list) and path[-1] < len(node)):
-                node[path[-1]] = value
+        _put(scene, path, value)
     try:
         validate_scene(scene, "fuzzed.toml")
     except SceneError as err:
