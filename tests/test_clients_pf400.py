@@ -67,8 +67,8 @@ def test_a_vplus_program_moves_the_plate_between_the_nests():
     report = result.report
     assert report.errors == []
     assert report.regions["nest_b"] == 1
-    plate = report.parts[0]  # the first plate (the stacker has put the next one on the source nest)
-    assert plate["region"] == "nest_b" and plate["tray"] == "nest_b" and plate["picked"]
+    (plate,) = report.parts  # the feeder's one plate, still in play on the target nest
+    assert plate["region"] == "nest_b" and plate["picked"] and not plate["dropped"]
     x, y, z = plate["pose"][:3]
     assert math.hypot(x - 350.0, y - 150.0) < 2.0  # mm: where the target nest is
     assert z == pytest.approx(770.0 + 14.35 / 2, abs=0.5)  # resting on it

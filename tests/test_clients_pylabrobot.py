@@ -53,6 +53,17 @@ async def session(log: dict, port: int) -> None:
     log["holding"] = (await arm.get_joint_position())[5], await arm.is_gripper_closed()
     await arm.drop_resource(pose(350.0, 150.0, 28.2))
     log["after_place"] = await arm.get_cartesian_position()
+
+    # On to the pallet's second position (pallet station 5: origin, last X point, index).
+    await arm.pick_up_resource(pose(350.0, 150.0, 27.2), plate_width=PLATE_WIDTH)
+    await arm.set_pallet_origin(5, pose(-150.0, 280.0, 18.2, yaw=90.0))
+    await arm.set_pallet_x(5, 2, -150.0, 420.0, 18.2)
+    await arm.set_station_type(5, access_type=1, location_type=1, z_clearance=100.0, z_above=0.0,
+                               z_grasp_offset=10.0)
+    await arm.set_pallet_index(5, 2)
+    log["pallet_index"] = await arm.get_pallet_index(5)
+    await arm.place_plate_station(5)
+    log["at_pallet"] = await arm.get_cartesian_position()
     try:
         await arm.send_command("no_such_command")
     except PreciseFlexError as err:
@@ -87,9 +98,16 @@ def test_pylabrobot_drives_the_tcs_and_moves_the_plate(tmp_path):
     assert (placed.location.x, placed.location.y) == pytest.approx((350.0, 150.0), abs=0.1)
     assert log["unknown"] == -714
 
+    assert log["pallet_index"] == (5, 2, 1, 1)
+    at_pallet = log["at_pallet"]  # back at the approach point above pallet position 2
+    assert (at_pallet.location.x, at_pallet.location.y) == pytest.approx((-150.0, 420.0), abs=0.1)
+
     data = json.loads(report.read_text())
     assert data["errors"] == []
-    assert data["regions"]["nest_b"] == 1
-    plate = data["parts"][0]  # the plate picked (the stacker may have put the next one on the source nest)
-    assert plate["region"] == "nest_b" and plate["tray"] == "nest_b" and not plate["dropped"]
-    assert plate["pose"][:2] == pytest.approx([350.0, 150.0], abs=2.0)
+    # The plate went to the target nest, then to the pallet's second cell.
+    releases = [e["where"] for e in data["events"] if e["kind"] == "release" and e["part"] == 0]
+    assert releases == ["nest_b", "pallet"]
+    plate = data["parts"][0]  # (the stacker may have put the next plate on the source nest)
+    assert plate["region"] == "pallet" and plate["tray"] == "pallet" and plate["cell"] == 1
+    assert not plate["dropped"]
+    assert plate["pose"][:2] == pytest.approx([-150.0, 420.0], abs=2.0)

@@ -34,7 +34,7 @@ def _run(args: argparse.Namespace) -> int:
         result = run_program(
             args.program, scene=args.scene, main=args.main, report_path=args.report,
             rrd_path=args.rrd, max_sim_time=args.max_sim_time, seed=args.seed,
-            progress=_show_progress(args), handle_signals=True,
+            progress=_show_progress(args), handle_signals=True, spawn=args.spawn, connect=args.connect,
         )
     except ProgramError as err:
         print(str(err), file=sys.stderr)
@@ -85,6 +85,10 @@ def _add_run_options(run: argparse.ArgumentParser) -> None:
     run.add_argument("--expect", default=None, metavar="EXPECT.toml",
                      help="check the report against these expectations after the run (exit status: the check's)")
     run.add_argument("--junit", default=None, metavar="FILE.xml", help="with --expect: also write JUnit XML")
+    run.add_argument("--spawn", action="store_true", help="also stream the run to a Rerun viewer started for it")
+    run.add_argument("--connect", default=None, metavar="ADDR",
+                     help="also stream the run to the Rerun viewer at this address "
+                          "(e.g. rerun+http://127.0.0.1:9876/proxy)")
     run.add_argument("--quiet", action="store_true",
                      help="no progress line (it is shown only on a terminal, for runs over a few seconds)")
     run.add_argument("--seeds", type=_positive_int, default=None, metavar="N",

@@ -93,10 +93,17 @@ class Cell:
         self._program, self._main = program, main
         return self.reset()
 
+    def close(self) -> None:
+        """Finish the recording of the run so far (the .rrd file is complete after this)."""
+        sim = self.started.simulation if self.started is not None else None
+        if sim is not None and sim.recorder is not None:
+            if sim.trace is not None:
+                sim.trace.close(sim.cell.time)
+            sim.recorder.close()
+
     def reset(self) -> "Cell":
         """Start the loaded program again on a fresh cell (or reload the bare cell)."""
-        if self.started is not None and self.started.simulation.recorder is not None:
-            self.started.simulation.recorder.close()
+        self.close()
         self.console.text.clear()
         self._rows.clear()
         self._signal_rows.clear()

@@ -14,7 +14,13 @@ Entity layout in the viewer::
     world/<geom>                      geoms of the world body itself (floor, tables, ...)
     robot/joints/<joint>              joint positions as scalars (hinge: degrees, slide: mm,
                                       as the controller reports them)
-    program/log                       TYPE output and errors (TextLog)
+    program/log                       TYPE output line by line at its time, and errors (TextLog)
+    program/task<n>/line              the program line task n is at, when it changes (TextLog)
+    program/task<n>/line_number       the same line as a number (scalar)
+    world/tcp                         the tool tip at each frame (Points3D: its path over time)
+    world/regions/<name>              the scene's regions (Boxes3D, static)
+    world/locations/<name>            the taught locations (Transform3D axes, static)
+    gripper/closed, gripper/force_n   the hand's state and its grip force on the held part
     cell/events                       grasp, release, slip, drop, collision... (TextLog)
     signals/<n>                       digital signals as 0/1 scalars, at each change
     vision/<camera>                   pictures as taken, with the locators' outlines and poses
@@ -23,7 +29,9 @@ Entity layout in the viewer::
 Bodies are flat under ``world`` (each carries its world pose, not a pose relative to
 its parent), so a body's entity path never changes with the kinematic tree. Bodies
 that cannot move (no joint in their chain to the world, not mocap) are logged once,
-static. Geoms of groups 0-2 are drawn (those MuJoCo's viewer shows by default);
+static; a moving body whose pose does not change (a parked or sleeping part) is sent only
+when it changes. A blueprint opens the viewer on the 3D view beside the joints, the
+signals and the program log. Geoms of groups 0-2 are drawn (those MuJoCo's viewer shows by default);
 height fields and SDF geoms are skipped.
 """
 
@@ -91,6 +99,21 @@ def _geom_rgba(model: mujoco.MjModel, g: int) -> np.ndarray:
     return np.clip(np.asarray(rgba, float), 0.0, 1.0)
 
 
+def blueprint():
+    """The viewer's layout: the cell in 3D, beside the joints, the signals and the program log."""
+    import rerun.blueprint as rrb
+
+    return rrb.Blueprint(rrb.Horizontal(
+        rrb.Spatial3DView(origin="world", name="cell"),
+        rrb.Vertical(
+            rrb.TimeSeriesView(origin="robot/joints", name="joints"),
+            rrb.TimeSeriesView(origin="signals", name="signals"),
+            rrb.TextLogView(origin="program", name="program"),
+        ),
+        column_shares=[3, 2],
+    ), collapse_panels=True)
+
+
 class Recorder:
     """Record a MuJoCo simulation to Rerun.
 
@@ -101,14 +124,14 @@ class Recorder:
 
     def __init__(self, model: mujoco.MjModel, path: str | Path | None, app_id: str = "twin",
                  fps: float = 30.0, spawn: bool = False, *, chunk_frames: int = 600,
-                 geom_groups: tuple[int, ...] = (0, 1, 2)) -> None:
+                 geom_groups: tuple[int, ...] = (0, 1, 2), connect: str | None = None) -> None:
         if fps <= 0:
             raise ValueError("fps must be positive")
         self.model = model
         self.path = Path(path) if path is not None else None
         self.fps = float(fps)
         self.chunk_frames = max(1, int(chunk_frames))
-        self.enabled = self.path is not None or spawn
+        self.enabled = self.path is not None or spawn or connect is not None
         self._geom_groups = tuple(geom_groups)
         self._closed = False
         self._next_frame = -math.inf
@@ -116,15 +139,18 @@ class Recorder:
 
         # A dedicated stream (never the global one); none at all when disabled.
         self.rec = rr.RecordingStream(app_id) if self.enabled else None
-        if self.path is not None and spawn:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            self.rec.spawn()   # attach the viewer, then replace the sinks with both
-            self.rec.set_sinks(rr.FileSink(str(self.path)), rr.GrpcSink())
-        elif self.path is not None:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            self.rec.save(str(self.path))
-        elif spawn:
-            self.rec.spawn()
+        if self.enabled:
+            sinks = []
+            if spawn:
+                rr.spawn(connect=False)   # start a viewer, listening on the default address
+                sinks.append(rr.GrpcSink())
+            if connect is not None:
+                sinks.append(rr.GrpcSink(connect))
+            if self.path is not None:
+                self.path.parent.mkdir(parents=True, exist_ok=True)
+                sinks.append(rr.FileSink(str(self.path)))
+            self.rec.set_sinks(*sinks)
+            self.rec.send_blueprint(blueprint())
 
         self._body_paths = self._entity_names()
         self._moving = np.flatnonzero(self._moving_mask())
@@ -142,6 +168,10 @@ class Recorder:
         self._quat = np.empty((n, nb, 4))      # MuJoCo order w, x, y, z
         self._q = np.empty((n, nj))
         self._k = 0                            # frames in the buffers
+        self._sent_pos = np.full((nb, 3), np.nan)   # the last pose sent per moving body
+        self._sent_quat = np.full((nb, 4), np.nan)
+        self._tcp_site: int | None = None      # set by log_cell: the tool tip's site
+        self._tcp = np.empty((n, 3))
         self._scalars: dict[str, tuple[list[float], list[float]]] = {}
         self._scalar_count = 0
 
@@ -226,6 +256,8 @@ class Recorder:
         self._pos[k] = data.xpos[idx]
         self._quat[k] = data.xquat[idx]
         self._q[k] = data.qpos[self._joint_qadr]
+        if self._tcp_site is not None:
+            self._tcp[k] = data.site_xpos[self._tcp_site]
         self._k = k + 1
         self.frames += 1
         self._next_frame = (math.floor(sim_time * self.fps + 1e-6) + 1) / self.fps
@@ -254,6 +286,27 @@ class Recorder:
         if points is not None and len(points):
             self.rec.log(f"{path}/found", rr.Points2D(points, labels=labels, radii=3.0, colors=[255, 64, 0]))
 
+    def log_cell(self, cell) -> None:
+        """The cell's static annotations: regions as boxes, taught locations as frames (in the
+        world, through the robot base's pose), and the tool tip whose path is recorded."""
+        if not self.enabled or self._closed:
+            return
+        from .controller.location import Location
+
+        regions = cell.regions
+        self.rec.log("world/regions", rr.Boxes3D(
+            mins=regions.lo, sizes=regions.hi - regions.lo, labels=list(regions.names),
+            colors=[(80, 160, 255, 60)] * len(regions.names)), static=True)
+        base = cell.robot_base_pose()
+        for name, values in cell.locations().items():
+            T = Location(*values).matrix()
+            T[:3, 3] /= 1000.0
+            W = base @ T
+            self.rec.log(f"world/locations/{_part(name)}", rr.Transform3D(
+                translation=W[:3, 3], mat3x3=W[:3, :3]), static=True)
+            self.rec.log(f"world/locations/{_part(name)}", rr.TransformAxes3D(0.05), static=True)
+        self._tcp_site = cell.gripper.tcp_site
+
     def log_scalar(self, name: str, sim_time: float, value: float) -> None:
         """One sample of a signal; buffered and sent with send_columns."""
         if not self.enabled or self._closed:
@@ -274,8 +327,21 @@ class Recorder:
         times = [rr.TimeColumn(TIMELINE, duration=self._t[:k].copy())]
         quat_xyzw = self._quat[:k][:, :, [1, 2, 3, 0]]
         for i, b in enumerate(self._moving):
-            self.rec.send_columns(self._body_paths[b], indexes=times, columns=rr.Transform3D.columns(
-                translation=self._pos[:k, i], quaternion=quat_xyzw[:, i]))
+            # Only the frames where the body's pose changed: a parked or sleeping part costs nothing.
+            pos, quat = self._pos[:k, i], self._quat[:k, i]
+            previous_pos = np.vstack([self._sent_pos[i:i + 1], pos[:-1]])
+            previous_quat = np.vstack([self._sent_quat[i:i + 1], quat[:-1]])
+            changed = np.any(pos != previous_pos, axis=1) | np.any(quat != previous_quat, axis=1)
+            if not changed.any():
+                continue
+            self._sent_pos[i], self._sent_quat[i] = pos[-1], quat[-1]
+            self.rec.send_columns(self._body_paths[b],
+                                  indexes=[rr.TimeColumn(TIMELINE, duration=self._t[:k][changed])],
+                                  columns=rr.Transform3D.columns(translation=pos[changed],
+                                                                 quaternion=quat_xyzw[changed, i]))
+        if self._tcp_site is not None:
+            self.rec.send_columns("world/tcp", indexes=times,
+                                  columns=rr.Points3D.columns(positions=self._tcp[:k]))
         q = self._q[:k] * self._joint_scale
         for i, path in enumerate(self._joint_paths):
             self.rec.send_columns(path, indexes=times, columns=rr.Scalars.columns(scalars=q[:, i]))

@@ -44,13 +44,13 @@ def cycle_times(events: list[dict]) -> list[float]:
     return [round(b - a, 4) for a, b in zip(times, times[1:])]
 
 
-def _open_recorder(sim: Simulation, rrd_path: str | Path | None):
-    if rrd_path is None:
+def _open_recorder(sim: Simulation, rrd_path: str | Path | None, spawn: bool = False, connect: str | None = None):
+    """A recorder to the .rrd file and/or a viewer it spawns or connects to (None: no recording)."""
+    if rrd_path is None and not spawn and connect is None:
         return None
     from .recorder import Recorder
 
-    Path(rrd_path).parent.mkdir(parents=True, exist_ok=True)
-    return Recorder(sim.cell.model, rrd_path)
+    return Recorder(sim.cell.model, rrd_path, spawn=spawn, connect=connect)
 
 
 def _sandbox(program: Path, output: str | Path | None) -> Path:
@@ -114,6 +114,8 @@ def run_program(
     console: Console | None = None,
     progress: bool = False,
     handle_signals: bool = False,
+    spawn: bool = False,
+    connect: str | None = None,
 ) -> RunResult:
     """Load the cell, load and start the program (a V+ file or a GPL project
     folder, or several V+ files loaded together), simulate, report.
@@ -121,11 +123,17 @@ def run_program(
     `progress`: a progress line on standard error once the run lasts a few seconds.
     `handle_signals`: Ctrl-C (SIGINT) and SIGTERM stop the run at the next major cycle;
     the report (marked interrupted) and the recording are still written (a second Ctrl-C
-    stops at once).  Only from the main thread; `twin run` sets both."""
+    stops at once).  Only from the main thread; `twin run` sets both.
+    `spawn`: also stream to a Rerun viewer started for the run; `connect`: to the viewer (or
+    server) at this gRPC address, e.g. rerun+http://127.0.0.1:9876/proxy."""
     # From the start: a signal while the cell loads stops the run before its first cycle;
     # and on, while the recording and the report are written.
     with _stop_on_signals(handle_signals) as stop:
-        started = start_program(program, scene, main, report_path, rrd_path, seed, console)
+        viewer = None
+        if spawn or connect is not None:
+            def viewer(sim: Simulation):
+                return _open_recorder(sim, rrd_path, spawn=spawn, connect=connect)
+        started = start_program(program, scene, main, report_path, rrd_path, seed, console, recorder=viewer)
         sim = started.simulation
         sim.stop = stop
         sim.begin(max_sim_time)
@@ -198,7 +206,11 @@ def start_program(program: str | Path | list[str | Path], scene: str | Path | No
         system = _start_vplus(sim, programs, main, console, sandbox)
 
     if sim.recorder is not None:
+        from .program_trace import ProgramTrace
+
         sim.recorder.log_text(0.0, f"twin run {program} on {scene}")
+        sim.recorder.log_cell(sim.cell)
+        sim.trace = ProgramTrace(sim.recorder, system)
     return StartedRun(program, scene, sim, system, report_path)
 
 
@@ -226,7 +238,8 @@ def finish_run(started: StartedRun, outcome) -> RunResult:
     if sim.vision is not None:
         sim.vision.close()  # its port and renderers
     if sim.recorder is not None:
-        sim.recorder.log_text(sim.cell.time, system.console.output or "(no output)")
+        if sim.trace is not None:
+            sim.trace.close(sim.cell.time)
         sim.recorder.close()
 
     report = build_report(started, outcome)

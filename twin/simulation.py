@@ -54,6 +54,7 @@ class Simulation:
         self.controller = VirtualController(self.cell, self.kinematics, settings)
         self.scheduler = Scheduler()
         self.recorder = recorder
+        self.trace = None  # twin.program_trace.ProgramTrace: TYPE lines and program lines, recorded
         self.vision = VisionServer.for_cell(self.cell, self.cell.scene, self.scene_path)  # None without [vision]
         self._events_recorded = 0  # cell events already sent to the recorder
         self.settle_s = float(controller_cfg.get("settle_after_program_s", 3.0))
@@ -158,6 +159,8 @@ class Simulation:
         for number, value in changes:
             recorder.log_scalar(f"signals/{number}", cell.time, float(value))
         changes.clear()
+        if self.trace is not None:
+            self.trace.cycle(cell.time)
         events = cell.events
         for event in events[self._events_recorded:]:
             detail = ", ".join(f"{k}={v}" for k, v in event.items() if k not in ("t", "kind"))
