@@ -8,6 +8,11 @@ within 20 % of the median of blocks 3 to 6 (the first blocks fill the pool), and
 likewise within 5 %.
 
     .venv/bin/python bench/long_run.py [--parts 1000] [--pool 120]
+
+Measured (2 shared cores, CPU time): 2.65 s per 25 parts early, 2.43 s for the last
+blocks (-8 %), memory 267 to 271 MB (+1.4 %), 1000 parts in the bin in the report.  A
+feeder `pool` of 2000: 6.5 s per 25 parts before feeders and sources built at most 120
+bodies a type (parts.py MAX_RECYCLED_BODIES), 2.3 s after.
 """
 
 from __future__ import annotations
@@ -20,6 +25,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from memory import rss_mb  # bench/ modules, run as scripts
 from twin.language.vplus.runtime import Console
 from twin.runner import finish_run, start_program
 
@@ -27,14 +33,6 @@ ROOT = Path(__file__).resolve().parent.parent
 DEMO = ROOT / "programs" / "vplus" / "move_parts.pg"
 SCENE = ROOT / "scenes" / "scara_pick.toml"
 BLOCK = 25  # parts per sample
-
-
-def rss_mb() -> float:
-    with open("/proc/self/status") as status:
-        for line in status:
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1]) / 1024
-    raise RuntimeError("no VmRSS in /proc/self/status")
 
 
 def measure(parts: int = 1000, pool: int = 120, show=None) -> dict:
