@@ -73,6 +73,18 @@ def error_of(text: str, **kw):
     return thread.error
 
 
+def main_project(tmp_path, body: str, declarations: str = ""):
+    """A project folder `tmp_path/proj`: Module Test with `declarations`, then Public Sub
+    Main() with `body` (its first line is line 3 when there are no declarations)."""
+    folder = tmp_path / "proj"
+    folder.mkdir()
+    (folder / "Project.gpr").write_text(
+        'ProjectBegin\nProjectName="proj"\nProjectStart="Main"\nProjectSource="Main.gpl"\nProjectEnd\n')
+    (folder / "Main.gpl").write_text(
+        "Module Test\n" + declarations + "    Public Sub Main()\n" + body + "    End Sub\nEnd Module\n")
+    return folder
+
+
 def run_project(folder, max_cycles: int = 100000, sandbox=None):
     """Load a project folder (Project.gpr), run its start procedure and threads to
     the end without a cell; returns (system, main thread)."""

@@ -34,7 +34,8 @@ def test_a_signal_stops_the_run_cleanly_and_keeps_report_and_recording(tmp_path,
     proc = subprocess.Popen([str(TWIN), "run", str(DEMO), "--report", str(report), "--rrd", str(rrd)],
                             cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 60
-    while not rrd.exists() and time.monotonic() < deadline:   # the recording opens as the run starts
+    # The recording opens as the run starts (a temporary file beside it, renamed at the end).
+    while not any(tmp_path.glob(".demo.rrd.*.tmp")) and time.monotonic() < deadline:
         time.sleep(0.1)
     time.sleep(2.0)
     proc.send_signal(signum)

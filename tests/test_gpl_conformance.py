@@ -12,21 +12,11 @@ from twin.errors import ProgramError
 from twin.runner import run_program
 
 from conftest import SCARA_SCENE as SCENE
-from gpl_helpers import error_of, output_of
-
-
-def _project(tmp_path: Path, body: str, declarations: str = "") -> Path:
-    folder = tmp_path / "proj"
-    folder.mkdir()
-    (folder / "Project.gpr").write_text(
-        'ProjectBegin\nProjectName="proj"\nProjectStart="Main"\nProjectSource="Main.gpl"\nProjectEnd\n')
-    (folder / "Main.gpl").write_text(
-        "Module Test\n" + declarations + "    Public Sub Main()\n" + body + "    End Sub\nEnd Module\n")
-    return folder
+from gpl_helpers import main_project, output_of
 
 
 def on_cell(tmp_path: Path, body: str, max_sim_time: float = 20.0):
-    return run_program(_project(tmp_path, body), scene=SCENE, max_sim_time=max_sim_time).report
+    return run_program(main_project(tmp_path, body), scene=SCENE, max_sim_time=max_sim_time).report
 
 
 # ------------------------------------------------------------ parameter database

@@ -95,7 +95,7 @@ for statement, line in [("Dim a(1000000000) As Integer", 3), ("Dim a(5000000) As
     case(f"memory: {statement}", main(*statement.split("\n        ")), -711, line)
 
 # ---- nesting and long lines
-for depth in (70, 500, 5000):
+for depth in (70, 500, 2000):
     for opener, closer in [("If True Then", "End If"), ("While False", "End While"), ("Select Case 1", None)]:
         if closer is None:
             lines = [x for _ in range(depth) for x in ("Select Case 1", "Case 1")] + ["a = 1"] + ["End Select"] * depth

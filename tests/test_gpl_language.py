@@ -647,6 +647,7 @@ def test_twin_run_project_folder(tmp_path, capsys):
         "        x = 1 / 0\n    End Sub\nEnd Module\n"
     )
     report = tmp_path / "out" / "report.json"
+    report.parent.mkdir()  # a report into a missing folder is refused before the run
     code = main(["run", str(tmp_path), "--report", str(report), "--max-sim-time", "2"])
     captured = capsys.readouterr()
     assert code == 1 and captured.out == "hello\n"

@@ -797,8 +797,8 @@ def _free_port(kind=socket.SOCK_STREAM) -> int:
 def test_telnet_echo_server_and_tcp_client(rt):
     """The manual's Telnet server (L2330-2364, E31; repaired: IPEndPoint("", port) and the
     missing AcceptSocket) in one thread, a TcpClient (L2383-2411, E32, its address
-    192.168.0.2 standing for the server) in another: the client gets each line echoed,
-    the server sees the close as a receive count of 0."""
+    192.168.0.2 replaced by 127.0.0.1: the twin refuses non-loopback peers) in another:
+    the client gets each line echoed, the server sees the close as a receive count of 0."""
     port = _free_port()
     replies = []
 
@@ -822,7 +822,7 @@ def test_telnet_echo_server_and_tcp_client(rt):
 
     def client(rt):
         yield from GplThread.Sleep(rt, 100)
-        tc = TcpClient(rt, IPEndPoint(rt, "192.168.0.2", port))
+        tc = TcpClient(rt, IPEndPoint(rt, "127.0.0.1", port))
         sock = tc.Client
         reply = SimpleNamespace(value="")
         for message in ("hello", "world"):
@@ -846,7 +846,7 @@ def test_udp_datagrams_and_receive_timeout(rt):
     def body(rt):
         server = UdpClient(rt, IPEndPoint(rt, "", port))
         client = UdpClient(rt)
-        client.Client.SendTo("ping", 0, IPEndPoint(rt, "10.0.0.9", port))
+        client.Client.SendTo("ping", 0, IPEndPoint(rt, "127.0.0.1", port))
         data, sender = SimpleNamespace(value=""), SimpleNamespace(value=None)
         got["n"] = yield from server.Client.ReceiveFrom(data, 100, sender)
         got["data"] = data.value
@@ -943,7 +943,7 @@ def test_modbus_write_and_read_examples(rt, modbus_slave):
     got = {}
 
     def body(rt):
-        mb = Modbus(rt, IPEndPoint(rt, "192.168.0.150", port))
+        mb = Modbus(rt, IPEndPoint(rt, "127.0.0.1", port))
         yield from mb.WriteSingleRegister(1, 600)
         for ii in range(16):
             yield from mb.WriteSingleCoil(ii + 1, ii & 1)
@@ -1119,7 +1119,7 @@ Module Net
     End Sub
 
     Public Sub Client()
-        Dim ep As New IPEndPoint("192.168.0.2", {port})
+        Dim ep As New IPEndPoint("127.0.0.1", {port})
         Dim tc As TcpClient
         Dim sock As Socket
         Dim reply As String
@@ -1152,7 +1152,7 @@ Module Mb
     End Sub
 
     Public Sub Modbus_Read_Example
-        Dim ep As New IPEndPoint("192.168.0.150", {port})
+        Dim ep As New IPEndPoint("127.0.0.1", {port})
         Dim mb As New Modbus(ep)
         Dim ii As Integer
         Dim bool() As Boolean
@@ -1170,7 +1170,7 @@ Module Mb
     End Sub
 
     Public Sub Modbus_Write_Example
-        Dim ep As New IPEndPoint("192.168.0.150", {port})
+        Dim ep As New IPEndPoint("127.0.0.1", {port})
         Dim mb As New Modbus (ep)
         Dim ii As Integer
         Dim output() As Integer
@@ -1237,7 +1237,7 @@ Module Tftp
         ' Access a TFTP server using UDP, open a file,
         ' and display it on the console.
         Dim file As String = "testfile.txt"
-        Dim srv_ep As New IPEndPoint("192.168.0.2", {port_box[0]})
+        Dim srv_ep As New IPEndPoint("127.0.0.1", {port_box[0]})
         Dim rem_ep, ep As IPEndPoint
         Dim out, inp As String
         Dim uc As New UdpClient()

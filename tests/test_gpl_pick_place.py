@@ -16,6 +16,7 @@ from twin.runner import run_program
 from conftest import ROOT, twin_run
 from conftest import SCARA_EXPECT as EXPECT
 from conftest import SCARA_SCENE as SCENE
+from gpl_helpers import main_project
 
 PROJECT = ROOT / "programs" / "gpl" / "pick_place"
 
@@ -49,18 +50,8 @@ def test_report_passes_twin_check_with_the_demos_expectations(run):
 
 
 # ------------------------------------------------------------ small projects
-def _project(tmp_path: Path, body: str, locations: str = "") -> Path:
-    folder = tmp_path / "proj"
-    folder.mkdir()
-    (folder / "Project.gpr").write_text(
-        'ProjectBegin\nProjectName="proj"\nProjectStart="Main"\nProjectSource="Main.gpl"\nProjectEnd\n')
-    (folder / "Main.gpl").write_text(
-        "Module Test\n" + locations + "    Public Sub Main()\n" + body + "    End Sub\nEnd Module\n")
-    return folder
-
-
 def _run(tmp_path: Path, body: str, max_sim_time: float = 30.0):
-    result = run_program(_project(tmp_path, body), scene=SCENE, max_sim_time=max_sim_time)
+    result = run_program(main_project(tmp_path, body), scene=SCENE, max_sim_time=max_sim_time)
     return result.report
 
 

@@ -87,6 +87,7 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
+from twin.outputs import write_atomically
 from twin.report import COUNT_NAMES, EVENT_KINDS, VISION_COUNT_NAMES, Report, ReportError
 
 __all__ = ["check", "evaluate", "load_expect", "main_check", "print_outcomes", "write_junit", "percentile",
@@ -585,6 +586,8 @@ def load_expect(path: str | Path) -> dict:
         raise ExpectError(f"{path}: cannot read: {e}") from None
     except tomllib.TOMLDecodeError as e:
         raise ExpectError(f"{path}: not valid TOML: {e}") from None
+    except UnicodeDecodeError as e:  # TOML is UTF-8 text
+        raise ExpectError(f"{path}: not valid TOML: not UTF-8 text ({e.reason} at byte {e.start})") from None
     try:
         _compile(data)
     except ExpectError as e:
@@ -638,9 +641,7 @@ def write_junit(path: str | Path, outcomes: list[Outcome], *, suite: str = "twin
     root = ET.Element("testsuites")
     root.append(suite_el)
     ET.indent(root)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    ET.ElementTree(root).write(path, encoding="utf-8", xml_declaration=True)
+    write_atomically(path, ET.tostring(root, encoding="unicode", xml_declaration=True) + "\n")
 
 
 def build_parser(prog: str = "twin check") -> argparse.ArgumentParser:

@@ -55,7 +55,7 @@ class ProgramError(Exception):
         step = ""
         if self.program is not None:
             step = f" at {self.program} step {self.step}" if self.step is not None else f" in {self.program}"
-        text = f"\n    {self.text.strip()}" if self.text else ""
+        text = "".join(f"\n    {line.strip()}" for line in self.text.strip().splitlines()) if self.text else ""
         return f"{where}{self.message}{code}{step}{text}"
 
     @classmethod
@@ -82,3 +82,38 @@ class SceneError(ProgramError):
     """A scene file that cannot describe a cell (bad TOML, unknown section or key, wrong
     type, impossible value, missing reference): a user error without a controller code,
     so `twin run` prints it (file: key path: what was expected) and exits 2."""
+
+
+# Exit statuses of the command line (README, "Command line").
+EXIT_OK = 0
+EXIT_PROGRAM_ERROR = 1  # the program stopped on an error (or a runaway was stopped)
+EXIT_INPUT_ERROR = 2  # a wrong file or command-line argument
+EXIT_INTERNAL_ERROR = 3  # a bug in twin
+
+
+class InputError(Exception):
+    """A wrong file or command-line argument: one line saying which and why (exit 2)."""
+
+
+def internal_error_message(err: BaseException) -> str:
+    """What the command line prints for an exception that is not the user's fault: that it
+    is a bug in twin, where it happened, and how to report it.  The whole trace goes to a
+    file (named in the message) rather than onto the user's terminal."""
+    import tempfile
+    import traceback
+
+    frames = traceback.extract_tb(err.__traceback__)
+    where = f"{frames[-1].filename}:{frames[-1].lineno} in {frames[-1].name}" if frames else "unknown place"
+    trace = "".join(traceback.format_exception(type(err), err, err.__traceback__))
+    try:
+        with tempfile.NamedTemporaryFile("w", prefix="twin-internal-error-", suffix=".txt",
+                                         delete=False, encoding="utf-8") as f:
+            f.write(trace)
+        saved = f"the full trace is in {f.name}"
+    except OSError:
+        saved = "the trace could not be saved"
+    return (f"twin: internal error: {type(err).__name__}: {err}\n"
+            f"  where: {where}\n"
+            f"  This is a bug in twin, not in your program or cell. Please report it to the twin\n"
+            f"  maintainers (the project's issue tracker) with the command line, the program and\n"
+            f"  scene files; {saved}.")

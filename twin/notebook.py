@@ -110,12 +110,19 @@ class Cell:
         if self._program is None:
             self.started, self.sim = None, Simulation(self.scene, seed=self.seed)
         else:
+            # The recording is written as the cell runs (a notebook never "finishes" a run).
+            recorder = self._recorder if self.rrd is not None else None
             self.started = start_program(self._program, self.scene, self._main, rrd_path=self.rrd, seed=self.seed,
-                                         console=self.console)
+                                         console=self.console, recorder=recorder)
             self.sim = self.started.simulation
         self.sim.begin(self.max_sim_time)
         self._sample()
         return self
+
+    def _recorder(self, sim: Simulation):
+        from .recorder import Recorder  # here: rerun is imported only when recording
+
+        return Recorder(sim.cell.model, self.rrd)
 
     @property
     def system(self):

@@ -68,11 +68,12 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
 from collections import Counter
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any
+
+from .outputs import write_atomically
 
 FORMAT_VERSION = 1
 
@@ -155,18 +156,8 @@ class Report:
             raise ValueError(f"report value {bad} is not a finite number") from None
 
     def write(self, path: str | os.PathLike) -> None:
-        """Write atomically (a reader never sees half a report)."""
-        path = Path(path)
-        text = self.to_json()
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
-        try:
-            with os.fdopen(fd, "w", encoding="utf-8") as f:
-                f.write(text)
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+        """Write atomically (a reader never sees half a report), only over a regular file."""
+        write_atomically(path, self.to_json())
 
     @classmethod
     def from_dict(cls, data: Any, source: str = "report") -> "Report":

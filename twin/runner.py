@@ -10,6 +10,7 @@ Python or a notebook:
 
 from __future__ import annotations
 
+import os
 import signal
 import tempfile
 import threading
@@ -18,10 +19,13 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
-from .errors import ProgramError
 from typing import TYPE_CHECKING
 
+from .controller.sandbox import SandboxError, check_root
+from .errors import InputError, ProgramError
+from .language.gpl.errors import NO_START_PROCEDURE
 from .language.vplus.runtime import Console, VPlusSystem
+from .outputs import check_replaceable, replace_output, temporary_beside
 from .report import Report
 from .resources import find_user_file
 from .simulation import DEFAULT_SCENE, Simulation
@@ -45,12 +49,19 @@ def cycle_times(events: list[dict]) -> list[float]:
 
 
 def _open_recorder(sim: Simulation, rrd_path: str | Path | None, spawn: bool = False, connect: str | None = None):
-    """A recorder to the .rrd file and/or a viewer it spawns or connects to (None: no recording)."""
+    """A recorder to the .rrd file and/or a viewer it spawns or connects to (None: no
+    recording).  A file alone is written to a temporary file beside `rrd_path`, renamed over
+    it when the run is over (outputs.replace_output): a run that fails leaves the old file
+    alone."""
     if rrd_path is None and not spawn and connect is None:
         return None
     from .recorder import Recorder
 
-    return Recorder(sim.cell.model, rrd_path, spawn=spawn, connect=connect)
+    if spawn or connect is not None:
+        return Recorder(sim.cell.model, rrd_path, spawn=spawn, connect=connect)
+    check_replaceable(rrd_path)
+    Path(rrd_path).parent.mkdir(parents=True, exist_ok=True)
+    return Recorder(sim.cell.model, temporary_beside(os.path.realpath(rrd_path)))
 
 
 def _sandbox(program: Path, output: str | Path | None) -> Path:
@@ -60,7 +71,13 @@ def _sandbox(program: Path, output: str | Path | None) -> Path:
     nothing behind."""
     if output is None:
         return Path(tempfile.gettempdir()) / f"twin-files-{uuid.uuid4().hex[:12]}"
-    return Path(output).resolve().parent / f"{program.stem}-files"
+    return sandbox_root(program, output)
+
+
+def sandbox_root(program: str | Path, output: str | Path) -> Path:
+    """`<program>-files` beside the report or recording `output` (twin.controller.sandbox
+    refuses it when it is a symbolic link)."""
+    return Path(output).resolve().parent / f"{Path(program).stem}-files"
 
 
 def _start_vplus(sim: Simulation, programs: list[Path], main: str | None, console: Console | None,
@@ -74,6 +91,9 @@ def _start_vplus(sim: Simulation, programs: list[Path], main: str | None, consol
     names = system.load_files(programs)
     if not names and main is None:
         raise ProgramError(f"{programs[0]}: no .PROGRAM in file", file=str(programs[0]))
+    if main is not None and main.lower() not in (name.lower() for name in system.programs):
+        raise InputError(f"--main {main}: no .PROGRAM {main} in {', '.join(map(str, programs))} "
+                         f"(programs: {', '.join(names) or 'none'})")
     sim.scheduler.add(system.start(main or names[0]))
     return system
 
@@ -88,7 +108,13 @@ def _start_gpl(sim: Simulation, project: Path, main: str | None, console: Consol
                        seed=sim.cell.seed)
     system.vision = sim.vision
     system.load_project(project)
-    system.start(main)
+    try:
+        system.start(main)
+    except ProgramError as err:
+        if err.code != NO_START_PROCEDURE:
+            raise
+        what = f"--main {main}" if main is not None else f"{project / 'Project.gpr'}: ProjectStart"
+        raise InputError(f"{what}: {err.message} ({err.code})") from None
     return system
 
 
@@ -101,6 +127,19 @@ class StartedRun:
     simulation: Simulation
     system: VPlusSystem | GplSystem
     report_path: str | Path | None
+    rrd_path: str | Path | None = None  # where the recording goes when the run is over
+
+
+def _load_cell(scene: Path, seed: int | None, overrides=None) -> Simulation:
+    """The cell of `scene`; a scene the loader cannot use is the user's error (exit 2), with
+    the loader's own words (a missing key, a wrong value, a broken model file)."""
+    try:
+        return Simulation(scene, seed=seed, overrides=overrides)
+    except KeyError as err:
+        raise ProgramError(f"{scene}: scene lacks the key {err}", file=str(scene)) from None
+    except (ValueError, TypeError, IndexError, OSError) as err:
+        text = str(err).removeprefix(f"{scene}: ")
+        raise ProgramError(text, file=str(scene)) from None
 
 
 def run_program(
@@ -114,8 +153,11 @@ def run_program(
     console: Console | None = None,
     progress: bool = False,
     handle_signals: bool = False,
+    max_wall_time: float | None = None,
+    no_progress_limit: float | None = None,
     spawn: bool = False,
     connect: str | None = None,
+    scene_overrides: dict[str, object] | None = None,
 ) -> RunResult:
     """Load the cell, load and start the program (a V+ file or a GPL project
     folder, or several V+ files loaded together), simulate, report.
@@ -125,7 +167,10 @@ def run_program(
     the report (marked interrupted) and the recording are still written (a second Ctrl-C
     stops at once).  Only from the main thread; `twin run` sets both.
     `spawn`: also stream to a Rerun viewer started for the run; `connect`: to the viewer (or
-    server) at this gRPC address, e.g. rerun+http://127.0.0.1:9876/proxy."""
+    server) at this gRPC address, e.g. rerun+http://127.0.0.1:9876/proxy.
+    `max_wall_time`, `no_progress_limit` (over the scene's [controller] no_progress_s; 0:
+    none): the watchdog's limits (twin.controller.watchdog).
+    `scene_overrides`: scene values by dotted key (`twin sweep --param`)."""
     # From the start: a signal while the cell loads stops the run before its first cycle;
     # and on, while the recording and the report are written.
     with _stop_on_signals(handle_signals) as stop:
@@ -133,12 +178,19 @@ def run_program(
         if spawn or connect is not None:
             def viewer(sim: Simulation):
                 return _open_recorder(sim, rrd_path, spawn=spawn, connect=connect)
-        started = start_program(program, scene, main, report_path, rrd_path, seed, console, recorder=viewer)
+        started = start_program(program, scene, main, report_path, rrd_path, seed, console, recorder=viewer,
+                                scene_overrides=scene_overrides)
         sim = started.simulation
         sim.stop = stop
-        sim.begin(max_sim_time)
-        with _progress(sim, progress) as on_cycle:
-            sim.advance(on_cycle=on_cycle)
+        if no_progress_limit is not None:
+            sim.no_progress_s = no_progress_limit if no_progress_limit > 0 else None
+        sim.begin(max_sim_time, max_wall_time)
+        try:
+            with _progress(sim, progress) as on_cycle:
+                sim.advance(on_cycle=on_cycle)
+        except BaseException:
+            _discard_recording(started)
+            raise
         return finish_run(started, sim.outcome())
 
 
@@ -180,9 +232,10 @@ def _progress(sim: Simulation, enabled: bool):
 
 def start_program(program: str | Path | list[str | Path], scene: str | Path | None = None, main: str | None = None,
                   report_path: str | Path | None = None, rrd_path: str | Path | None = None,
-                  seed: int | None = None, console: Console | None = None, recorder=None) -> StartedRun:
+                  seed: int | None = None, console: Console | None = None, recorder=None,
+                  scene_overrides: dict[str, object] | None = None) -> StartedRun:
     """Load the cell and the program and start it (`recorder`: one already made, as
-    `twin serve` makes for a live viewer)."""
+    `twin serve` makes for a live viewer; `scene_overrides` as in `run_program`)."""
     # as given, else the bundled file of that name; several V+ files are loaded together
     programs = [find_user_file(p) for p in ([program] if isinstance(program, (str, Path)) else program)]
     program = programs[0]
@@ -195,23 +248,40 @@ def start_program(program: str | Path | list[str | Path], scene: str | Path | No
     if not scene.exists():
         raise ProgramError(f"{scene}: no such scene file", file=str(scene))
 
-    sim = Simulation(scene, seed=seed)
+    sim = _load_cell(scene, seed, scene_overrides)
+    sandbox = _sandbox(program, report_path or rrd_path)
+    try:
+        check_root(sandbox)
+    except SandboxError as err:
+        raise ProgramError(f"sandbox folder {err}", file=str(sandbox)) from None
+    own_recording = recorder is None and rrd_path is not None
     sim.recorder = recorder(sim) if recorder is not None else _open_recorder(sim, rrd_path)
     if sim.vision is not None:
         sim.vision.recorder = sim.recorder
-    sandbox = _sandbox(program, report_path or rrd_path)
-    if program.is_dir():
-        system = _start_gpl(sim, program, main, console, sandbox)
-    else:
-        system = _start_vplus(sim, programs, main, console, sandbox)
-
+    started = StartedRun(program, scene, sim, None, report_path, rrd_path if own_recording else None)
+    try:
+        if program.is_dir():
+            started.system = _start_gpl(sim, program, main, console, sandbox)
+        else:
+            started.system = _start_vplus(sim, programs, main, console, sandbox)
+    except BaseException:
+        _discard_recording(started)
+        raise
     if sim.recorder is not None:
         from .program_trace import ProgramTrace
 
         sim.recorder.log_text(0.0, f"twin run {program} on {scene}")
         sim.recorder.log_cell(sim.cell)
-        sim.trace = ProgramTrace(sim.recorder, system)
-    return StartedRun(program, scene, sim, system, report_path)
+        sim.trace = ProgramTrace(sim.recorder, started.system)
+    return started
+
+
+def _discard_recording(started: StartedRun) -> None:
+    """A run that fails before its end leaves no temporary recording behind."""
+    recorder = started.simulation.recorder
+    if started.rrd_path is not None and recorder is not None:
+        recorder.close()
+        recorder.path.unlink(missing_ok=True)
 
 
 def build_report(started: StartedRun, outcome) -> Report:
@@ -241,6 +311,8 @@ def finish_run(started: StartedRun, outcome) -> RunResult:
         if sim.trace is not None:
             sim.trace.close(sim.cell.time)
         sim.recorder.close()
+        if started.rrd_path is not None:
+            replace_output(sim.recorder.path, started.rrd_path)
 
     report = build_report(started, outcome)
     if report_path is not None:

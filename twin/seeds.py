@@ -16,7 +16,7 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["SeedOutcome", "run_seeds", "seed_report_path"]
+__all__ = ["SeedOutcome", "failures_of", "run_seeds", "seed_report_path"]
 
 
 @dataclass
@@ -37,7 +37,6 @@ def seed_report_path(report: str | Path | None, seed: int) -> Path | None:
 
 def _one(program: str | list[str], scene: str | None, main: str | None, seed: int, max_sim_time: float,
          report: str | None, expect: dict | None) -> SeedOutcome:
-    from .check import evaluate
     from .errors import ProgramError
     from .language.vplus.runtime import Console
     from .runner import run_program
@@ -49,11 +48,18 @@ def _one(program: str | list[str], scene: str | None, main: str | None, seed: in
     except ProgramError as err:
         return SeedOutcome(seed, [str(err)], 0.0, None)
     rep = result.report
+    return SeedOutcome(seed, failures_of(rep, expect), rep.sim_time_s, str(path) if path else None)
+
+
+def failures_of(report, expect: dict | None) -> list[str]:
+    """Why a run failed (empty when it passed): the expectations that do not hold, or
+    without expectations the errors that stopped it."""
+    from .check import evaluate
+    from .errors import ProgramError
+
     if expect is not None:
-        failures = [o.failure for o in evaluate(rep, expect) if o.failure is not None]
-    else:
-        failures = [str(ProgramError.from_dict(e)) for e in rep.errors]
-    return SeedOutcome(seed, failures, rep.sim_time_s, str(path) if path else None)
+        return [o.failure for o in evaluate(report, expect) if o.failure is not None]
+    return [str(ProgramError.from_dict(e)) for e in report.errors]
 
 
 def run_seeds(program: str | list[str], seeds: list[int], *, scene: str | None = None, main: str | None = None,

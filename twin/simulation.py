@@ -16,15 +16,18 @@ from pathlib import Path
 from typing import Callable
 
 from .controller.controller import COLLISION, MotionSettings, VirtualController
-from .controller.io import DigitalIO
+from .controller.io import INPUTS, DigitalIO
 from .controller.location import Location
 from .controller.scheduler import Scheduler
+from .controller.watchdog import (DEADLOCK_CONFIRM_S, DEFAULT_NO_PROGRESS_S, Watchdog, WatchdogLimits,
+                                  is_external, task_is_blocked)
 from .errors import ProgramError
 from .physics.cell import Cell
 from .resources import bundled
 from .vision.server import VisionServer
 
 MAJOR_CYCLE_S = 0.016
+AT_REST_SPEED = 1e-3  # m/s or rad/s: a body slower than this is not moving (watchdog)
 DEFAULT_SCENE = bundled("scenes/scara_pick.toml")
 
 
@@ -39,10 +42,11 @@ class RunOutcome:
 class Simulation:
     """A loaded cell with its robot controller, I/O and task scheduler."""
 
-    def __init__(self, scene: str | Path = DEFAULT_SCENE, seed: int | None = None, recorder=None):
+    def __init__(self, scene: str | Path = DEFAULT_SCENE, seed: int | None = None, recorder=None,
+                 overrides: dict[str, object] | None = None):
         self.scene_path = Path(scene)
         self.io = DigitalIO()  # the controller's signals; the cell's components read and drive them
-        self.cell = Cell.from_scene(self.scene_path, seed=seed, io=self.io)
+        self.cell = Cell.from_scene(self.scene_path, seed=seed, io=self.io, overrides=overrides)
         self.kinematics = self.cell.kinematics
         controller_cfg = self.cell.scene.get("controller", {})
         settings = MotionSettings(
@@ -60,25 +64,39 @@ class Simulation:
         self.settle_s = float(controller_cfg.get("settle_after_program_s", 3.0))
         self.stop = threading.Event()   # set (by a signal handler): the run stops at the next cycle
         self.interrupted = False        # the last run was stopped by `stop`
+        no_progress = float(controller_cfg.get("no_progress_s", DEFAULT_NO_PROGRESS_S))
+        self.no_progress_s: float | None = no_progress if no_progress > 0 else None
+        self.clock_reads = 0  # how often the programs read the time (watchdog: a wait may end)
+        self._events_watched = 0  # cell events the watchdog has seen
+        self._hand_watched = self.controller.hand_state
+        self._encoders_watched: tuple[int, ...] = ()
+        # A source brings parts for ever and a feeder one after its delay: the cell is never a
+        # fixed point with a source, and a feeder's delay is waited out before a deadlock.
+        self._cell_lives = any(c.section == "source" for c in self.cell.components)
+        self.deadlock_confirm_s = DEADLOCK_CONFIRM_S + max(
+            (float(c.config.delay) for c in self.cell.components if c.section == "feeder"), default=0.0)
 
     def taught_locations(self) -> dict[str, Location]:
         return {name: Location(*values) for name, values in self.cell.locations().items()}
 
     def clock(self) -> float:
+        self.clock_reads += 1
         return self.cell.time
 
-    def run(self, max_sim_time: float = 3600.0, on_cycle: Callable[[], bool] | None = None) -> RunOutcome:
+    def run(self, max_sim_time: float = 3600.0, on_cycle: Callable[[], bool] | None = None,
+            max_wall_time: float | None = None) -> RunOutcome:
         """Run until every task has ended and the cell has settled, or until `on_cycle`,
         called after every major cycle (`twin serve` paces and stops with it), says stop,
-        or `stop` is set."""
-        self.begin(max_sim_time)
+        or `stop` is set, or a limit or the watchdog stops it (docs/robustness.md)."""
+        self.begin(max_sim_time, max_wall_time)
         self.advance(on_cycle=on_cycle)
         return self.outcome()
 
-    def begin(self, max_sim_time: float = 3600.0) -> None:
+    def begin(self, max_sim_time: float = 3600.0, max_wall_time: float | None = None) -> None:
         """Start a run that `advance` carries on, in as many pieces as wanted (a notebook
         runs to a time, a line or a signal, looks, and continues)."""
         self.max_sim_time = max_sim_time
+        self.watchdog = Watchdog(WatchdogLimits(self.no_progress_s, max_wall_time, self.deadlock_confirm_s))
         self.errors: list[dict] = []
         self.program_end: float | None = None
         self.finished = False
@@ -115,6 +133,7 @@ class Simulation:
         cell, controller, scheduler, errors = self.cell, self.controller, self.scheduler, self.errors
         steps = max(1, round(MAJOR_CYCLE_S / cell.timestep))
         if self.program_end is None:
+            reads, alive = self.clock_reads, self._live_tasks()
             scheduler.run_cycle()
             for task in scheduler.tasks:
                 error = getattr(task, "error", None)
@@ -146,7 +165,45 @@ class Simulation:
         fault = controller.take_fault()  # the robot stopped by itself (a belt window violation)
         if fault is not None and self._give_to_tasks(fault) is not None:
             errors.append(fault.as_dict(cell.time))
+        if self.program_end is None:
+            runaway = self._watch(self.clock_reads == reads, alive)
+            if runaway is not None:
+                controller.stop()
+                errors.append(runaway.as_dict(cell.time))
+                self.program_end = cell.time
+                self.finished = True
         self._record()
+
+    def _live_tasks(self) -> list:
+        return [t for t in self.scheduler.tasks if not t.finished and not getattr(t, "paused", False)]
+
+    def _watch(self, no_clock_read: bool, alive_before: list):
+        """Tell the watchdog what this cycle changed (before `_record` drains the signal
+        changes); the error that ends the run, if it is a runaway.  Progress is what the
+        programs do or look at: the robot or the hand moving, an output or soft signal
+        changing, an input a program has read changing, a task starting or ending (parts
+        the cell moves on its own are not: a belt may run for ever)."""
+        cell, io, controller, live = self.cell, self.io, self.controller, self._live_tasks()
+        hand, self._hand_watched = self._hand_watched, controller.hand_state
+        progressed = (live != alive_before or hand != controller.hand_state
+                      or any(n not in INPUTS or n in io.watched for n, _ in io.changes)
+                      or float(abs(cell.robot_qvel()).max(initial=0.0)) > AT_REST_SPEED)
+        waits = [self.scheduler.waiting_on(task) for task in live]
+        external_wait = any(is_external(wait) for wait in waits)
+        blocked = (no_clock_read and not progressed and not io.changes and not controller.moving
+                   and not external_wait and all(task_is_blocked(w, t.SLICE) for w, t in zip(waits, live))
+                   and self._cell_at_rest())
+        return self.watchdog.observe(cell.time, progressed, blocked, external_wait, live)
+
+    def _cell_at_rest(self) -> bool:
+        """Nothing in the cell moves or happens, and nothing will by itself: no new event, no
+        body moving, no encoder counting, no part source."""
+        cell = self.cell
+        events, self._events_watched = self._events_watched, len(cell.events)
+        encoders, self._encoders_watched = self._encoders_watched, tuple(
+            e.counts() for e in cell.encoders.values())
+        return (not self._cell_lives and events == len(cell.events) and encoders == self._encoders_watched
+                and float(abs(cell.data.qvel).max(initial=0.0)) <= AT_REST_SPEED)
 
     def _record(self) -> None:
         """Once per major cycle: a recording frame when one is due, and the digital signals

@@ -20,6 +20,7 @@ class DigitalIO:
     def __init__(self) -> None:
         self.state: dict[int, bool] = {}
         self.changes: list[tuple[int, bool]] = []  # (signal, value) in order, for the recorder
+        self.watched: set[int] = set()  # inputs a program has read (the watchdog's progress)
 
     @staticmethod
     def _check(number: int, writable: bool) -> None:
@@ -42,5 +43,10 @@ class DigitalIO:
         """SIG(n) is true when n is on; SIG(-n) when it is off."""
         number = abs(signed)
         self._check(number, writable=False)
-        value = self.state.get(number, False)
+        value = self.read(number)
         return value if signed > 0 else not value
+
+    def read(self, number: int) -> bool:
+        """A program reads signal `number` (checked by the caller)."""
+        self.watched.add(number)
+        return self.state.get(number, False)

@@ -39,6 +39,11 @@ class _Token:
 RELEASE = _Token("RELEASE")
 # NEXT_CYCLE: sleep until slice 0 of the next major cycle (V+ bare WAIT).
 NEXT_CYCLE = _Token("NEXT_CYCLE")
+# NETWORK_CYCLE: NEXT_CYCLE for a task polling the network: what it waits for comes from
+# outside the twin, so the watchdog never takes it for a deadlock (watchdog.external).
+NETWORK_CYCLE = _Token("NETWORK_CYCLE")
+NETWORK_CYCLE.external = True
+_NEXT_CYCLE = (NEXT_CYCLE, NETWORK_CYCLE)
 
 
 class Runnable(Protocol):
@@ -70,6 +75,10 @@ class Scheduler:
             task.scheduler = self
         self.tasks.append(task)
 
+    def waiting_on(self, task: Runnable) -> Any:
+        """What `task` last yielded: a wait condition, a token, or None (not waiting)."""
+        return self._waits.get(id(task))
+
     @property
     def alive(self) -> bool:
         return any(not t.finished and not getattr(t, "paused", False) for t in self.tasks)
@@ -81,7 +90,7 @@ class Scheduler:
             begin = getattr(task, "begin_cycle", None)
             if begin is not None and not task.finished:
                 begin()
-            if self._waits.get(id(task)) is NEXT_CYCLE:
+            if self._waits.get(id(task)) in _NEXT_CYCLE:
                 del self._waits[id(task)]
         for slice_number in range(SLICES):
             passed: set[int] = set()
@@ -105,7 +114,7 @@ class Scheduler:
         if known is not None and known[0] == self._runs:
             return known[1]
         interrupt = getattr(task, "interrupt_due", None)
-        answer = (interrupt is not None and interrupt()) or (wait is not NEXT_CYCLE and wait())
+        answer = (interrupt is not None and interrupt()) or (wait not in _NEXT_CYCLE and wait())
         self._answers[id(task)] = (self._runs, answer)
         return answer
 

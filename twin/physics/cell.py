@@ -28,7 +28,7 @@ from ..controller.io import DigitalIO
 from .components import REGISTRY, CellContext, Component, Conveyor, Encoder, Robot, WeldGripper
 from .parts import PartPool
 from .regions import Regions
-from .scene import load_scene
+from .scene import apply_overrides, load_scene
 from .schema import Scene, validate_scene
 
 INTEGRATORS = {"implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
@@ -49,10 +49,13 @@ class Cell:
     """
 
     @classmethod
-    def from_scene(cls, path: str | Path, seed: int | None = None, io: DigitalIO | None = None) -> "Cell":
-        """Load a scene file; ``seed`` overrides the scene's ``[physics] seed``."""
+    def from_scene(cls, path: str | Path, seed: int | None = None, io: DigitalIO | None = None,
+                   overrides: dict[str, object] | None = None) -> "Cell":
+        """Load a scene file; ``seed`` overrides the scene's ``[physics] seed``, ``overrides``
+        its values by dotted key (`scene.apply_overrides`)."""
         path = Path(path)
-        return cls(load_scene(path), path, seed, io)
+        scene = load_scene(path)
+        return cls(apply_overrides(scene, overrides, path) if overrides else scene, path, seed, io)
 
     def __init__(self, scene: dict, scene_path: str | Path, seed: int | None = None, io: DigitalIO | None = None):
         self.scene = scene

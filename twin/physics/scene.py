@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import sys
 from pathlib import Path
 
@@ -37,6 +38,41 @@ def load_scene(path: str | Path) -> dict:
     return scene
 
 
+def apply_overrides(scene: dict, overrides: dict[str, object], path: str | Path) -> dict:
+    """A copy of `scene` with values set by dotted key paths, as `twin sweep --param` gives
+    them: ``controller.monitor_speed``, ``conveyor.infeed.speed`` (an array of tables is
+    addressed by an element's ``name`` or its 0-based index).  A missing table is created;
+    what the key names is then checked by the schema like any scene key."""
+    scene = copy.deepcopy(scene)
+    for key, value in overrides.items():
+        *tables, last = key.split(".")
+        node: object = scene
+        for i, part in enumerate(tables):
+            if isinstance(node, list):
+                node = _element(node, part, ".".join(tables[:i + 1]), path)
+            elif isinstance(node, dict):
+                node = node.setdefault(part, {})
+            else:
+                raise SceneError(f"{key}: {'.'.join(tables[:i])} is a value, not a table", file=str(path))
+        if isinstance(node, list):
+            raise SceneError(f"{key}: name an element of {'.'.join(tables)} (its name or index)", file=str(path))
+        if not isinstance(node, dict):
+            raise SceneError(f"{key}: {'.'.join(tables)} is a value, not a table", file=str(path))
+        node[last] = value
+    return scene
+
+
+def _element(items: list, part: str, where: str, path: str | Path) -> dict:
+    for item in items:
+        if isinstance(item, dict) and item.get("name") == part:
+            return item
+    if part.isdigit() and int(part) < len(items):
+        return items[int(part)]
+    names = [str(item.get("name")) for item in items if isinstance(item, dict) and "name" in item]
+    raise SceneError(f"{where}: no element named {part!r} (names: {', '.join(names) or 'none'}; "
+                     f"or an index below {len(items)})", file=str(path))
+
+
 def resolve(path: str, scene_path: Path, key: str = "model") -> Path:
     """Model paths in a scene are relative to the scene file or to twin's bundled
     resources (models/ in the repository or in the installed package)."""
@@ -60,4 +96,4 @@ def load_model(path: str, scene_path: Path, key: str) -> mujoco.MjSpec:
                          file=str(scene_path)) from None
 
 
-__all__ = ["Scene", "load_model", "load_scene", "resolve", "validate_scene"]
+__all__ = ["Scene", "apply_overrides", "load_model", "load_scene", "resolve", "validate_scene"]

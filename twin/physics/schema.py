@@ -67,6 +67,7 @@ class Controller(Section):
     monitor_speed: Annotated[float, Field(gt=0, le=100)] | None = None
     cartesian_speed_mm_s: Positive | None = None
     settle_after_program_s: NonNegative | None = None
+    no_progress_s: NonNegative | None = None  # the watchdog's no-progress limit, 0: none (docs/robustness.md)
 
 
 class Robot(Section):

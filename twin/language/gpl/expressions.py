@@ -526,7 +526,8 @@ class ExpressionCompiler(Scope):
                 result if nums else SType("double")
         if op in _OPERATOR_HELPERS:
             helper, rtype = _OPERATOR_HELPERS[op]
-            return self.unchecked(f"{helper}({a}, {b})"), SType(rtype)
+            code = f"{helper}({a}, {b})"  # / and ^ check their own range; \ gives any int
+            return self.unchecked(code) if op == "\\" else code, SType(rtype)
         if op == "mod":
             return f"_mod({a}, {b})", result
         if op == "&":

@@ -601,6 +601,28 @@ class GplThread:
     def alive(self) -> bool:
         return not self.finished
 
+    @property
+    def label(self) -> str:
+        return f"thread {self.name}"
+
+    def current_location(self) -> dict | None:
+        """Where the thread is, for the watchdog's message: procedure, file, line, source."""
+        running = self.generator.gi_frame
+        generator = running.f_locals.get("gen") if running is not None else None
+        where = None
+        while generator is not None:
+            frame = getattr(generator, "gi_frame", None)
+            if frame is not None and frame.f_code.co_filename.startswith("<gpl:"):
+                unit = self.system.compiled.units[int(frame.f_code.co_filename[5:-1])]
+                found = unit.line_map.get(frame.f_lineno)
+                if found is not None:
+                    lines = self.system.sources.get(unit.file, [])
+                    line = found[0]
+                    where = {"program": unit.name, "file": unit.file, "line": line,
+                             "text": lines[line - 1] if 0 < line <= len(lines) else None}
+            generator = getattr(generator, "gi_yieldfrom", None)
+        return where
+
     def abort(self) -> None:
         self.finished = True
         if self.running:

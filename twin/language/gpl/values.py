@@ -278,7 +278,10 @@ def _div(a, b) -> float:
     b = _num(b)
     if b == 0:
         raise fail(DIVIDE_BY_ZERO)
-    return _num(a) / b
+    quotient = _num(a) / b
+    if -DOUBLE_MAX <= quotient <= DOUBLE_MAX:
+        return quotient
+    raise fail(OVERFLOW, f"{_num(a)} / {b}")
 
 
 def _idiv(a, b) -> int:

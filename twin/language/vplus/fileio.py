@@ -4,7 +4,9 @@ Control"; eV+ guide, same chapter).
 * DISK: files in the run's sandbox folder (`VPlusSystem.sandbox`).  A file
   spec `unit:path\\name.ext` maps to `sandbox/UNIT/path/name.ext`, or
   `sandbox/path/name.ext` without a unit; names are case-insensitive as on
-  the controller's DOS-style disks and may not leave the sandbox.  Records are
+  the controller's DOS-style disks and may not leave the sandbox (no "..", no
+  symbolic link, no device: twin.controller.sandbox; *Invalid file
+  specification* otherwise).  Records are
   variable length (CR LF ends a record, Ctrl-Z ends the file) unless FOPEN_
   gave a record length.  WRITE goes straight to the file, so nothing is lost
   when a program ends without FCLOSE.
@@ -28,7 +30,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable
 
-from ...controller.scheduler import NEXT_CYCLE
+from ...controller.sandbox import Sandbox, SandboxError
+from ...controller.scheduler import NETWORK_CYCLE
 from . import messages as msg
 from .values import to_int
 
@@ -96,10 +99,12 @@ class OpenFile:
     data: bytes = b""  # what reads see (R and D)
     position: int = 0
 
+    box: Sandbox | None = None
+
     def content(self) -> bytes:
         """What a READ sees: the file as opened, or as written so far (W and A:
         a file open for writing may be read too, [000] "Disk I/O")."""
-        return self.data if self.mode in ("R", "D") else self.path.read_bytes()
+        return self.data if self.mode in ("R", "D") else _sandboxed(self.box.read_bytes, self.path)
 
 
 @dataclass
@@ -117,6 +122,7 @@ class Devices:
 
     def __init__(self, sandbox: Path | None, console, clock: Callable[[], float] = lambda: 0.0):
         self.sandbox = Path(sandbox) if sandbox is not None else None
+        self.box = Sandbox(sandbox) if sandbox is not None else None
         self.console = console
         self.clock = clock  # simulated time: the network is polled once per instant
         self.serial_lines: dict[int, SerialLine] = {}
@@ -226,7 +232,7 @@ class Devices:
             if not 1 <= len(stem) <= 8 or len(ext) > 3:
                 raise IoError(msg.INVALID_FILE_SPEC)
             path = _existing_case(path, name)
-        return path
+        return _sandboxed(self.box.inside, path)
 
     def fopen(self, task: int, lun: int, mode: str, spec: str, record_length: int = 0, flags: int = 0,
               dialect: str = "eV+") -> None:
@@ -239,28 +245,29 @@ class Devices:
             raise IoError(msg.DEVICE_NOT_READY)
         path = self.disk_path(spec, wildcards=mode == "D")
         self._check_shared(task, path, writing=mode in ("W", "A"))
-        handle = OpenFile(path, mode, record_length, random=bool(flags & RANDOM_ACCESS))
+        box = self.box
+        handle = OpenFile(path, mode, record_length, random=bool(flags & RANDOM_ACCESS), box=box)
         if mode == "D":
             # FOPEND "path\" or "path\*.*" lists a folder; "path\*.TXT" filters it.
             folder, pattern = (path, "*") if path.is_dir() else (path.parent, path.name)
             if not folder.is_dir():
                 raise IoError(msg.NONEXISTENT_FILE)
-            entries = [p for p in sorted(folder.iterdir()) if fnmatch.fnmatch(p.name.lower(), pattern.lower())]
+            entries = [p for p in _sandboxed(box.entries, folder) if fnmatch.fnmatch(p.name.lower(), pattern.lower())]
             record = _directory_record_v if dialect == "V+" else _directory_record_ev
             handle.data = b"".join(record(p) + b"\r\n" for p in entries)
         elif mode == "R":
             if not path.is_file():
                 raise IoError(msg.NONEXISTENT_FILE)
-            handle.data = path.read_bytes()
+            handle.data = _sandboxed(box.read_bytes, path)
         elif mode == "W":
             if path.exists():
                 raise IoError(msg.FILE_EXISTS)  # disk files are never overwritten
-            path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_bytes(b"")
+            _sandboxed(box.make_folders, path.parent)
+            _sandboxed(box.write_bytes, path, b"", "xb")
         else:  # A
-            path.parent.mkdir(parents=True, exist_ok=True)
-            path.touch()
-            handle.data = path.read_bytes()
+            _sandboxed(box.make_folders, path.parent)
+            _sandboxed(box.write_bytes, path, b"", "ab")
+            handle.data = _sandboxed(box.read_bytes, path)
             handle.position = len(handle.data)
         unit.file = handle
 
@@ -358,15 +365,14 @@ class Devices:
             data = data[: handle.record_length].ljust(handle.record_length, b"\0")
             if handle.random and record > 0:
                 handle.position = (record - 1) * handle.record_length
-            content = bytearray(handle.path.read_bytes())
+            content = bytearray(_sandboxed(self.box.read_bytes, handle.path))
             content.extend(b"\0" * max(handle.position - len(content), 0))
             end = handle.position + len(data)
             content[handle.position : end] = data
-            handle.path.write_bytes(bytes(content))
+            _sandboxed(self.box.write_bytes, handle.path, bytes(content))
             handle.position = end
             return
-        with handle.path.open("ab") as out:
-            out.write(data + (b"\r\n" if newline else b""))
+        _sandboxed(self.box.write_bytes, handle.path, data + (b"\r\n" if newline else b""), "ab")
 
     def read_record(self, task: int, lun: int, record: int = 0) -> str | None:
         """The next record, or None while a serial line has no complete line yet."""
@@ -418,7 +424,7 @@ class Devices:
         while unit is not None and unit.serial is not None and not (unit.serial.received or unit.serial.errors):
             yield rt.SLICE
         while unit is not None and unit.tcp is not None and not unit.tcp.has_byte():
-            yield NEXT_CYCLE  # the network is polled once per cycle
+            yield NETWORK_CYCLE  # the network is polled once per cycle
 
     def getc(self, task: int, lun: int) -> int:
         """GETC: the next byte, CR, LF and Ctrl-Z included, or a negative error code."""
@@ -453,6 +459,14 @@ class Devices:
             return err.code
         self.status[(task, lun)] = 1
         return byte
+
+
+def _sandboxed(operation, *args):
+    """A sandbox operation; a refused path is the program's *Invalid file specification*."""
+    try:
+        return operation(*args)
+    except SandboxError:
+        raise IoError(msg.INVALID_FILE_SPEC) from None
 
 
 def _existing_case(folder: Path, name: str) -> Path:

@@ -402,6 +402,19 @@ class TaskControl:
             generator = getattr(generator, "gi_yieldfrom", None)
         return where
 
+    @property
+    def label(self) -> str:
+        return f"task {self.number}"
+
+    def current_location(self) -> dict | None:
+        """Where the task is, for the watchdog's message: program, step, file, line, source."""
+        where = self.current_statement()
+        if where is None:
+            return None
+        compiled, statement = where
+        return {"program": compiled.name, "step": statement.step, "file": compiled.file,
+                "line": statement.line, "text": self.system.source_line(compiled.file, statement.line)}
+
     # ------------------------------------------------------------ TASK()
     def task_info(self, select=None, number=None) -> float:
         """TASK(select, task): 0 or omitted: this task's number; 1: the state of `task`

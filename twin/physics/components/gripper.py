@@ -243,7 +243,9 @@ class FingerGripper(WeldGripper):
 
     def grip_force(self) -> float:
         """Squeeze on a gripped part, N: the smaller of the two jaw actuator forces."""
-        return float(np.min(np.abs(self.data.actuator_force[self._finger_act])))
+        left, right = self._finger_act.tolist()  # two floats: plain Python beats numpy's reductions
+        force = self.data.actuator_force
+        return min(abs(float(force[left])), abs(float(force[right])))
 
     def capacity(self, i: int) -> float:
         mu = max(self.pad_mu, float(self.model.geom_friction[self.parts.geom[i], 0]))

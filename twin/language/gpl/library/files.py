@@ -9,16 +9,18 @@ costs 1 byte plus 1 byte per record, each Write/WriteLine is one record of at
 most 255 bytes; a full file raises -323 "Device full", unless created with
 ``-wrap``, which drops the oldest whole records.  Serial devices (``/dev/com1``
 ...) need hardware: opening one raises -3103.  Paths are case-sensitive; a name
-may not start with "." (L2710), so a path cannot leave the sandbox.
+may not start with "." (L2710), so a path cannot leave the sandbox; a symbolic link,
+a device or a FIFO inside it is refused like a bad path, -3111
+(twin.controller.sandbox, docs/robustness.md).
 """
 
 from __future__ import annotations
 
-import shutil
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ....controller.sandbox import Sandbox, SandboxError
 from . import codes
 from ..values import GplArray, format_value
 from . import gpl_class, shared
@@ -94,9 +96,17 @@ def sandbox_path(rt, path: str) -> Path:
         if parts and parts[0] == "dev":
             raise codes.fail(codes.NOT_SUPPORTED, f"{path} (serial ports need hardware)")
         raise codes.fail(codes.INVALID_PATH, f"{path} (devices: /flash, /ROMDISK, /flash2-8, /NVRAM)")
-    device = Path(rt.sandbox) / parts[0]
-    device.mkdir(parents=True, exist_ok=True)  # the controller's devices always exist
-    return device.joinpath(*parts[1:])
+    box = Sandbox(rt.sandbox)
+    _sandboxed(box.make_folders, box.root / parts[0])  # the controller's devices always exist
+    return _sandboxed(box.path, *parts)
+
+
+def _sandboxed(operation, *args):
+    """A sandbox operation; a path it refuses is the program's -3111 Invalid file path."""
+    try:
+        return operation(*args)
+    except SandboxError as err:
+        raise codes.fail(codes.INVALID_PATH, f"{err.path} {err.reason}") from None
 
 
 def _nvram_name(path: str) -> str | None:
@@ -129,7 +139,7 @@ def read_bytes(rt, path: str) -> bytes:
     real = sandbox_path(rt, path)
     if not real.is_file():
         raise codes.fail(codes.FILE_NOT_FOUND, path)
-    return real.read_bytes()
+    return _sandboxed(Sandbox(rt.sandbox).read_bytes, real)
 
 
 @gpl_class("StreamReader")
@@ -197,7 +207,7 @@ class StreamWriter:
             real = sandbox_path(rt, path)
             if not real.parent.is_dir():
                 raise codes.fail(codes.FILE_NOT_FOUND, f"{path} (no such folder)")
-            self._file = open(real, "ab" if append else "wb")
+            self._file = _sandboxed(Sandbox(rt.sandbox).open, real, "ab" if append else "wb")
             self._autoflush = False
 
     AutoFlush = stored("_autoflush", bool)
@@ -259,11 +269,11 @@ class File:
         target = sandbox_path(rt, str(destination))
         if target.exists() and not overwrite:
             raise codes.fail(codes.INVALID_PATH, f"{destination} exists")
-        target.write_bytes(data)
+        _sandboxed(Sandbox(rt.sandbox).write_bytes, target, data)
 
     @shared
     def CreateDirectory(rt, path) -> None:
-        sandbox_path(rt, str(path)).mkdir(parents=True, exist_ok=True)
+        _sandboxed(Sandbox(rt.sandbox).make_folders, sandbox_path(rt, str(path)))
 
     @shared
     def DeleteDirectory(rt, path) -> None:
@@ -272,7 +282,7 @@ class File:
             raise codes.fail(codes.FILE_NOT_FOUND, str(path))
         if any(real.iterdir()):
             raise codes.fail(codes.INVALID_PATH, f"{path} is not empty")
-        shutil.rmtree(real)
+        real.rmdir()
 
     @shared
     def DeleteFile(rt, path) -> None:
@@ -301,4 +311,5 @@ def _listing(rt, path: str, folders: bool) -> GplArray:
     real = sandbox_path(rt, path)
     if not real.is_dir():
         raise codes.fail(codes.FILE_NOT_FOUND, path)
-    return GplArray.of(sorted(p.name for p in real.iterdir() if p.is_dir() == folders), "")
+    entries = _sandboxed(Sandbox(rt.sandbox).entries, real)
+    return GplArray.of([p.name for p in entries if p.is_dir() == folders], "")

@@ -26,6 +26,7 @@ from . import byref, gpl_class
 from .members import stored
 from .net import IPEndPoint, LOOPBACK
 from .thread import wait_ms
+from ....controller.watchdog import external
 
 DEFAULT_PORT = 502
 UNIT_ID = 1
@@ -53,6 +54,7 @@ class Modbus:
         if not isinstance(endpoint, IPEndPoint):
             raise codes.fail(codes.INVALID_ARGUMENT, "New Modbus needs an IPEndPoint")
         self._rt = rt
+        endpoint.address()  # refuses a non-loopback device address (closed network)
         self._port = endpoint.Port or DEFAULT_PORT
         self._sock: socket.socket | None = None
         self._transaction = 0
@@ -86,7 +88,7 @@ class Modbus:
             if frame is not None:
                 break
             yield from wait_ms(self._rt, timeout if timeout > 0 else -1,
-                                until=lambda: bool(select.select([sock], [], [], 0)[0]))
+                                until=external(lambda: bool(select.select([sock], [], [], 0)[0])))
             if not select.select([sock], [], [], 0)[0]:
                 raise codes.fail(codes.MODBUS_TIMEOUT, f"no response in {timeout:g} ms")
             data = sock.recv(4096)

@@ -2,10 +2,14 @@
 TcpListener, UdpClient, on real operating-system sockets limited to loopback.
 
 Decisions (docs/gpl.md):
-* The twin is one host: every address a program names (its own, "" for any, or
-  a peer such as 192.168.0.2) is 127.0.0.1; ports are used as given.  So the
-  manual's client and server examples talk to each other, or to a test's peer,
-  on loopback.  ``IPEndPoint.IPAddress`` still reads back what was set.
+* The twin is one host on a closed network: an address a program names must be
+  loopback (127.x.x.x, "localhost", "::1") or "any" ("", "0.0.0.0"), and is used
+  as 127.0.0.1; ports are used as given.  Any other address (a peer such as
+  192.168.0.2) is refused with -3120 *Socket error* when the socket would use
+  it (connect, send, bind, Modbus), so a program reaches nothing beyond the
+  twin's loopback (docs/robustness.md).  The manual's client and server
+  examples talk to each other, or to a test's peer, on 127.0.0.1.
+  ``IPEndPoint.IPAddress`` still reads back what was set.
 * Calls that wait (Receive, ReceiveFrom, AcceptSocket) give the scheduler back
   every cycle until data or a connection is there, so other threads and the
   robot go on; their timeouts (``ReceiveTimeout``, ms, 0 = none) run in
@@ -19,6 +23,7 @@ Decisions (docs/gpl.md):
 
 from __future__ import annotations
 
+import ipaddress
 import select
 import socket
 
@@ -27,8 +32,10 @@ from . import codes
 from . import byref, gpl_class
 from .members import stored
 from .thread import wait_ms
+from ....controller.watchdog import external
 
 LOOPBACK = "127.0.0.1"
+ANY_ADDRESS = ("", "0.0.0.0", "::")
 RECEIVE_CHUNK = 65536
 
 
@@ -64,8 +71,22 @@ class IPEndPoint:
         self._port = value
 
     def address(self) -> tuple[str, int]:
-        """The loopback address the twin uses for this endpoint (its port as mapped)."""
+        """The loopback address the twin uses for this endpoint (its port as mapped); a
+        non-loopback address is refused (the twin simulates a closed network)."""
+        if not _loopback(self._address):
+            raise codes.fail(codes.SOCKET_ERROR, f"{self._address} is not a loopback address "
+                             "(the twin is a closed network: use 127.0.0.1)")
         return LOOPBACK, real_port(self._port)
+
+
+def _loopback(address: str) -> bool:
+    text = address.strip()
+    if text in ANY_ADDRESS or text.lower() == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(text).is_loopback
+    except ValueError:  # a host name: the closed network resolves none but localhost
+        return False
 
 
 def _endpoint(rt, value) -> IPEndPoint:
@@ -148,7 +169,7 @@ class Socket:
         if not self._blocking:
             raise codes.fail(codes.SOCKET_TIMEOUT, "no data (non-blocking socket)")
         timeout = self._receive_timeout
-        yield from wait_ms(self._rt, timeout if timeout > 0 else -1, until=lambda: _readable(sock))
+        yield from wait_ms(self._rt, timeout if timeout > 0 else -1, until=external(lambda: _readable(sock)))
         if not _readable(sock):
             raise codes.fail(codes.SOCKET_TIMEOUT, f"nothing received in {timeout:g} ms")
         return True
@@ -251,7 +272,7 @@ class TcpListener:
         """Wait for a connection request and accept it."""
         sock = self._s()
         if not _readable(sock):
-            yield from wait_ms(self._rt, -1, until=lambda: _readable(sock))
+            yield from wait_ms(self._rt, -1, until=external(lambda: _readable(sock)))
         try:
             conn, (host, port) = sock.accept()
         except OSError as err:
@@ -274,7 +295,7 @@ class UdpClient:
     def __init__(self, rt, endpoint=None):
         self._rt = rt
         sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        port = _endpoint(rt, endpoint).Port if endpoint is not None else 0
+        port = _endpoint(rt, endpoint).address()[1] if endpoint is not None else 0
         try:
             sock.bind((LOOPBACK, real_port(port) if port else 0))
         except OSError as err:

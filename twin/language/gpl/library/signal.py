@@ -48,7 +48,7 @@ class Signal:
 
     @shared
     def DIO(rt, number) -> bool:
-        return bool(rt.io.state.get(_io_number(number, write=False), False))
+        return bool(rt.io.read(_io_number(number, write=False)))
 
     @shared
     def set_DIO(rt, number, value) -> None:

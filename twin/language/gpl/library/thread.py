@@ -52,6 +52,7 @@ def wait_ms(rt, ms: float, until=None):
             return False
         return clock() >= end - 1e-9 and clock() > start
 
+    ready.external = getattr(until, "external", False)  # a socket: the watchdog leaves it be
     yield ready
 
 

@@ -9,7 +9,7 @@ IOSTAT(lun); an I/O error never stops the program.
 from __future__ import annotations
 
 from .. import messages as msg
-from ....controller.scheduler import NEXT_CYCLE
+from ....controller.scheduler import NETWORK_CYCLE
 from ..fileio import RETURN_LUN, TERMINAL_LUN, IoError
 from ..formats import render
 from ..values import MAX_STRING, _str, fail, to_int
@@ -170,7 +170,7 @@ def _read(rt, unit: tuple, kinds: tuple):
 
 def _read_network(rt, devices, lun: int, mode: int, kinds: tuple):
     while (outcome := devices.read_network(rt.number, lun, wait=not mode & NO_WAIT)) is None:
-        yield NEXT_CYCLE  # the network is polled once per cycle
+        yield NETWORK_CYCLE  # the network is polled once per cycle
     text, handle = outcome
     if devices.iostat(rt.number, lun) < 0:
         return [None] * len(kinds) + [None]
