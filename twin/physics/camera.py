@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from ..errors import SceneError
 from .components.base import CellContext, Component
 from .geometry import MM, matrix_to_quat, vplus_to_matrix
 
@@ -151,13 +152,14 @@ def add_targets(spec: mujoco.MjSpec, config: CameraConfig) -> None:
                       pos=[0, 0, post + DISC_THICKNESS / 2], material=matte.name, contype=0, conaffinity=0)
 
 
-def add_camera(spec: mujoco.MjSpec, config: CameraConfig) -> None:
+def add_camera(spec: mujoco.MjSpec, config: CameraConfig, scene_path: str | None = None) -> None:
     """Add the camera (its light, its calibration target) to a model being built; enlarge
     the offscreen buffer."""
     T = vplus_to_matrix(config.pose)
     parent = spec.worldbody if config.mount is None else spec.body(config.mount)
     if parent is None:
-        raise ValueError(f"camera {config.name!r}: no body {config.mount!r} to mount it on")
+        raise SceneError(f"camera {config.name!r}: mount: {config.mount!r}: no body of that name to mount it on",
+                         file=scene_path)
     parent.add_camera(name=f"camera/{config.name}", pos=T[:3, 3],
                       quat=matrix_to_quat(T[:3, :3] @ _CV_TO_MJ), fovy=config.fovy_deg)
     if config.light is not None:
@@ -187,7 +189,7 @@ class Camera(Component):
         self.camera = CameraConfig.from_table(config.model_dump(exclude_none=True))
 
     def build(self, spec: mujoco.MjSpec, ctx: CellContext) -> None:
-        add_camera(spec, self.camera)
+        add_camera(spec, self.camera, str(ctx.scene_path))
 
 
 def cameras_of(cell) -> list[CameraConfig]:

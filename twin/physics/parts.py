@@ -35,6 +35,14 @@ RETIRED_CONTYPE, RETIRED_CONAFFINITY = 2, 0
 RETIRE_SPEED = 2e-3  # m/s and rad/s: a part in a bin slower than this ...
 RETIRE_CHECKS = 3  # ... at this many floor checks in a row (0.1 s apart) retires
 RETIRED_DAMPING = (1e5, 100.0)  # N s/m and N m s/rad on a retired part's free joint (~um/s under a part's weight)
+# Bodies a feeder or source builds per part type, whatever its `pool` asks: every body
+# costs every physics step, asleep or parked (MuJoCo's per-dof work; measured 57 ns a body
+# a step, a 2000-body pool made the demo 2.8x slower), and so does a bigger heap of
+# retired parts under the landing ones (a 200-body heap: +60 % a part). No more are ever
+# in play at once; beyond it the bodies are recycled (see `take`), each part's report
+# entry frozen where it came to rest, so the report still gives every part's final pose.
+# The demo's pool: measured flat over 1000 parts (bench/long_run.py).
+MAX_RECYCLED_BODIES = 120
 
 
 class PartPool(Component):
@@ -52,8 +60,11 @@ class PartPool(Component):
         self.instances: list[dict] = []  # per instance: id, body, type, owner, picked, missed, dropped, frozen
 
     # ------------------------------------------------------------------ construction
-    def reserve(self, owner: Component, type_names: list[str], count: int) -> np.ndarray:
-        """Reserve `count` bodies for `owner`, cycling through `type_names`; their indices."""
+    def reserve(self, owner: Component, type_names: list[str], count: int, recycled: bool = True) -> np.ndarray:
+        """Reserve `count` bodies for `owner`, cycling through `type_names`, at most
+        MAX_RECYCLED_BODIES a type when the owner recycles them (`take`); their indices."""
+        if recycled:
+            count = min(count, MAX_RECYCLED_BODIES * len(type_names))
         first = len(self._owner_of)
         for k in range(count):
             self._owner_of.append(owner)
@@ -72,9 +83,9 @@ class PartPool(Component):
         self.sleep = ctx.scene.physics.sleep
         meshes: dict[str, float] = {}
         half_z = []
-        for name, t in self.types.items():
+        for k, (name, t) in enumerate(self.types.items()):
             if t.shape == "mesh":
-                mesh = trimesh.load(str(resolve(t.mesh, ctx.scene_path, f"part {name} mesh")), force="mesh")
+                mesh = trimesh.load(str(resolve(t.mesh, ctx.scene_path, f"part[{k}].mesh")), force="mesh")
                 v = np.asarray(mesh.vertices, dtype=float) / MM
                 v -= (v.min(axis=0) + v.max(axis=0)) / 2  # origin at the bounding box centre
                 spec.add_mesh(name=f"part_mesh_{name}", uservert=v.flatten(),

@@ -45,7 +45,7 @@ class Scatter(Component):
     def reserve_parts(self, pool) -> None:
         c = self.config
         self.kinds = list(c.parts)
-        self.bodies = {t: pool.reserve(self, [t], c.count) for t in dict.fromkeys(self.kinds)}
+        self.bodies = {t: pool.reserve(self, [t], c.count, recycled=False) for t in dict.fromkeys(self.kinds)}
 
     def derived_regions(self):
         x0, y0, x1, y1 = self.config.mat

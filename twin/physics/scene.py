@@ -6,6 +6,8 @@ import copy
 import sys
 from pathlib import Path
 
+import mujoco
+
 from ..errors import SceneError
 from ..resources import resource_root
 from .schema import Scene, validate_scene
@@ -19,13 +21,19 @@ else:  # Python 3.10: the same parser, as a package
 def load_scene(path: str | Path) -> dict:
     """Parse and validate a scene file: the TOML as a dict (SceneError on any problem)."""
     path = Path(path)
+    if not path.exists():
+        raise SceneError("no such scene file", file=str(path))
+    if not path.is_file():  # a folder, or a FIFO that would wait for a writer forever
+        raise SceneError("not a file (a scene is a TOML file)", file=str(path))
     try:
-        with path.open("rb") as f:
-            scene = tomllib.load(f)
-    except FileNotFoundError:
-        raise SceneError("no such scene file", file=str(path)) from None
+        # utf-8-sig: a byte order mark, as some editors write one, is not part of the TOML
+        scene = tomllib.loads(path.read_bytes().decode("utf-8-sig"))
+    except UnicodeDecodeError as e:
+        raise SceneError(f"not valid TOML: not UTF-8 text (byte {e.start})", file=str(path)) from None
     except tomllib.TOMLDecodeError as e:
         raise SceneError(f"not valid TOML: {e}", file=str(path)) from None
+    except OSError as e:
+        raise SceneError(f"cannot read it: {e.strerror}", file=str(path)) from None
     validate_scene(scene, path)
     return scene
 
@@ -70,10 +78,22 @@ def resolve(path: str, scene_path: Path, key: str = "model") -> Path:
     resources (models/ in the repository or in the installed package)."""
     for base in (Path(scene_path).parent, resource_root()):
         candidate = (base / path).resolve()
-        if candidate.exists():
+        if candidate.is_file():
             return candidate
+        if candidate.exists():
+            raise SceneError(f"{key}: {path!r} is not a file", file=str(scene_path))
     raise SceneError(f"{key}: {path!r} not found next to the scene nor in {resource_root()}",
                      file=str(scene_path))
 
 
-__all__ = ["Scene", "apply_overrides", "load_scene", "resolve", "validate_scene"]
+def load_model(path: str, scene_path: Path, key: str) -> mujoco.MjSpec:
+    """The MuJoCo model file (MJCF or URDF) a scene names at `key`, as a spec."""
+    found = resolve(path, scene_path, key)
+    try:
+        return mujoco.MjSpec.from_file(str(found))
+    except ValueError as e:  # MuJoCo's own parse message
+        raise SceneError(f"{key}: {path!r} is not a MuJoCo model ({str(e).strip().splitlines()[0]})",
+                         file=str(scene_path)) from None
+
+
+__all__ = ["Scene", "apply_overrides", "load_model", "load_scene", "resolve", "validate_scene"]

@@ -27,15 +27,19 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from ..errors import SceneError
 
-Finite = Annotated[float, Field(allow_inf_nan=False)]
-Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
-NonNegative = Annotated[float, Field(ge=0, allow_inf_nan=False)]
+# No number in a cell is near a million in the file's units (mm, deg, kg, mm/s, s): larger
+# ones are typos (1e300) that would overflow the physics.
+HUGE = 1e6
+Finite = Annotated[float, Field(ge=-HUGE, le=HUGE, allow_inf_nan=False)]
+Positive = Annotated[float, Field(gt=0, le=HUGE, allow_inf_nan=False)]
+NonNegative = Annotated[float, Field(ge=0, le=HUGE, allow_inf_nan=False)]
 Vec2 = Annotated[list[Finite], Field(min_length=2, max_length=2)]
 Vec3 = Annotated[list[Finite], Field(min_length=3, max_length=3)]
 Size2 = Annotated[list[Positive], Field(min_length=2, max_length=2)]
 Size3 = Annotated[list[Positive], Field(min_length=3, max_length=3)]
 Pose6 = Annotated[list[Finite], Field(min_length=6, max_length=6)]
 Rgba = Annotated[list[Annotated[float, Field(ge=0, le=1)]], Field(min_length=4, max_length=4)]
+Seed = Annotated[int, Field(ge=0, le=2**63 - 1)]  # numpy's random seeds are non-negative
 Output = Annotated[int, Field(ge=1, le=512)]  # V+ digital outputs
 Input = Annotated[int, Field(ge=1001, le=1512)]  # V+ digital inputs
 
@@ -52,11 +56,11 @@ def _nonzero(v: list[float]) -> list[float]:
 
 
 class Physics(Section):
-    timestep: Positive = 0.002
+    timestep: Annotated[float, Field(gt=0, le=0.1, allow_inf_nan=False)] = 0.002  # s
     integrator: Literal["implicitfast", "implicit", "euler", "rk4"] = "implicitfast"
     sleep: bool = True
-    check_interval: Positive = 0.01
-    seed: int = 0
+    check_interval: Annotated[float, Field(gt=0, le=10.0, allow_inf_nan=False)] = 0.01  # s
+    seed: Seed = 0
 
 
 class Controller(Section):
@@ -272,7 +276,7 @@ class CameraSection(Section):
     distortion: Annotated[list[Finite], Field(min_length=5, max_length=5)] = [0.0, 0.0, 0.0, 0.0, 0.0]
     exposure: Positive = 1.0
     noise: NonNegative = 0.0
-    seed: int = 0
+    seed: Seed = 0
     light: CameraLight | None = None
     depth_range_mm: Size2 = [50.0, 5000.0]
     calibration: CameraCalibration | None = None
@@ -415,12 +419,19 @@ def _message(error: dict) -> str:
         allowed = sorted(parent.model_fields) if parent is not None else []
         close = difflib.get_close_matches(key, allowed, n=1)
         hint = f"; did you mean {close[0]}?" if close else ""
-        what = f"section [{key}]" if len(loc) == 1 else f"key {key!r} in {_path(loc[:-1])}"
+        if len(loc) > 1:
+            what = f"key {key!r} in {_path(loc[:-1])}"
+        elif isinstance(error.get("input"), (dict, list)):
+            what = f"section [{key}]"
+        else:
+            what = f"key {key!r} at the top level (before the first section)"
         return f"unknown {what} (known: {', '.join(allowed)}{hint})"
     where = _path(loc)
     msg = error["msg"]
+    got = error.get("input")
+    shown = f", got {got!r}" if not isinstance(got, dict) else ""
     if kind == "value_error":
-        msg = msg.removeprefix("Value error, ")
+        msg = msg.removeprefix("Value error, ") + shown
         return f"{where}: {msg}" if where else msg
     if kind == "missing":
         return f"{where}: missing (required)"
@@ -428,8 +439,6 @@ def _message(error: dict) -> str:
                 "bool_type": "true or false", "list_type": "a list", "model_type": "a table",
                 "dict_type": "a table", "finite_number": "a finite number (not nan or inf)",
                 "literal_error": msg.removeprefix("Input should be ").replace("'", '"')}.get(kind)
-    got = error.get("input")
-    shown = f", got {got!r}" if not isinstance(got, dict) else ""
     if expected is not None:
         return f"{where}: expected {expected}{shown}"
     return f"{where}: {msg[0].lower() + msg[1:]}{shown}"

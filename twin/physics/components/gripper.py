@@ -26,7 +26,8 @@ import math
 import mujoco
 import numpy as np
 
-from ..scene import resolve
+from ...errors import SceneError
+from ..scene import load_model
 from .base import LIVE, CellContext, Component
 from .robot import Robot
 
@@ -60,8 +61,12 @@ class WeldGripper(Component):
         self.closed = False
 
     def build(self, spec: mujoco.MjSpec, ctx: CellContext) -> None:
-        gspec = mujoco.MjSpec.from_file(str(resolve(self.config.model, ctx.scene_path, "gripper.model")))
-        spec.attach(gspec, prefix=self.prefix, site=spec.site(self.config.site))
+        gspec = load_model(self.config.model, ctx.scene_path, "gripper.model")
+        site = spec.site(self.config.site)
+        if site is None:
+            raise SceneError(f"gripper.site: {self.config.site!r}: no site of that name in the robot model (has: "
+                             f"{', '.join(s.name for s in spec.sites) or 'none'})", file=str(ctx.scene_path))
+        spec.attach(gspec, prefix=self.prefix, site=site)
         Robot.gravity_compensate(spec)
 
     def add_part_welds(self, spec: mujoco.MjSpec, count: int) -> None:

@@ -18,7 +18,7 @@ import numpy as np
 
 from ...controller.kinematics import RobotKinematics
 from ..geometry import matrix_to_quat, vplus_to_matrix
-from ..scene import resolve
+from ..scene import load_model, resolve
 from .base import CellContext, Component
 
 
@@ -28,11 +28,12 @@ class Robot(Component):
     def __init__(self, config, ctx: CellContext):
         super().__init__(config, ctx)
         self.model_path = resolve(config.model, ctx.scene_path, "robot.model")
+        self.scene_path = ctx.scene_path
         self.base_T = vplus_to_matrix(config.base)
 
     def make_spec(self) -> mujoco.MjSpec:
         """The cell's spec starts as the robot's own file."""
-        spec = mujoco.MjSpec.from_file(str(self.model_path))
+        spec = load_model(self.config.model, self.scene_path, "robot.model")
         spec.modelname = "twin_cell"
         # The robot's joints, in chain order (the robot file holds nothing else).
         self.joint_names: list[str] = [j.name for j in spec.joints]
