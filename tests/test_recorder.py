@@ -266,3 +266,35 @@ def test_a_run_records_signals_and_cell_events_at_their_times(tmp_path):
     first = result.report.events[0]
     assert events["TextLog:text"][0][0].startswith(f"{first['kind']}: ")
     assert events["sim_time"][0] * 1e-9 == pytest.approx(first["time"], abs=1e-9)
+
+
+def test_a_belt_window_is_drawn_where_the_program_set_it(tmp_path):
+    """The recording shows a V+ WINDOW (issue 8: "the recording shows ... the window"): a
+    flat box on the belt frame between the upstream and downstream limits, from the frame
+    after the WINDOW instruction."""
+    from twin.runner import run_program
+
+    program = tmp_path / "win.pg"
+    program.write_text(""".PROGRAM win()
+    ENABLE BELT
+    SET nom = TRANS(300, 0, 100, 0, 0, 0)
+    DEFBELT %b = nom, 1, 8, 0.1
+    WINDOW %b = TRANS(250, 0, 100, 0, 0, 0), TRANS(400, 0, 100, 0, 0, 0)
+    DELAY 0.5
+.END
+""")
+    path = tmp_path / "run.rrd"
+    result = run_program(program, scene=Path(__file__).resolve().parents[1] / "scenes" / "scara_conveyor.toml",
+                         rrd_path=path, max_sim_time=10.0)
+    assert result.report.errors == []
+    rrd = read_rrd(path)
+    windows = [k for k in rrd if k.startswith("/world/belts/") and k.endswith("/window")]
+    assert len(windows) == 1
+    box = timed(rrd[windows[0]])
+    (half,) = box["Boxes3D:half_sizes"][0]
+    (centre,) = box["Boxes3D:centers"][0]
+    assert half[0] == pytest.approx(0.075) and centre[0] == pytest.approx(0.025)  # -50 .. +100 mm
+    assert half[1] > 0.02
+    frame = timed(rrd[windows[0].rsplit("/", 1)[0]])
+    assert frame["Transform3D:translation"][0][0] == pytest.approx(
+        (result.simulation.cell.robot_base_pose() @ [0.3, 0.0, 0.1, 1.0])[:3].tolist(), abs=1e-6)

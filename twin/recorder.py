@@ -307,6 +307,20 @@ class Recorder:
             self.rec.log(f"world/locations/{_part(name)}", rr.TransformAxes3D(0.05), static=True)
         self._tcp_site = cell.gripper.tcp_site
 
+    def log_belt_window(self, name: str, sim_time: float, world_T: np.ndarray, upstream_m: float,
+                        downstream_m: float, width_m: float) -> None:
+        """A belt's tracking window from `sim_time` on: a flat box between the upstream and
+        downstream limits along the belt frame's X (`world_T`, metres), across the belt."""
+        if not self.enabled or self._closed:
+            return
+        self.rec.set_time(TIMELINE, duration=sim_time)
+        path = f"world/belts/{_part(name)}"
+        self.rec.log(path, rr.Transform3D(translation=world_T[:3, 3], mat3x3=world_T[:3, :3]))
+        self.rec.log(f"{path}/window", rr.Boxes3D(
+            centers=[[(upstream_m + downstream_m) / 2, 0.0, 0.002]],
+            half_sizes=[[(downstream_m - upstream_m) / 2, width_m / 2, 0.002]],
+            labels=[f"{name} window"], colors=[(255, 200, 0, 90)]))
+
     def log_scalar(self, name: str, sim_time: float, value: float) -> None:
         """One sample of a signal; buffered and sent with send_columns."""
         if not self.enabled or self._closed:

@@ -61,6 +61,7 @@ class Simulation:
         self.trace = None  # twin.program_trace.ProgramTrace: TYPE lines and program lines, recorded
         self.vision = VisionServer.for_cell(self.cell, self.cell.scene, self.scene_path)  # None without [vision]
         self._events_recorded = 0  # cell events already sent to the recorder
+        self._windows_shown: dict[int, tuple] = {}  # belt frame -> the window last drawn
         self.settle_s = float(controller_cfg.get("settle_after_program_s", 3.0))
         self.stop = threading.Event()   # set (by a signal handler): the run stops at the next cycle
         self.interrupted = False        # the last run was stopped by `stop`
@@ -226,6 +227,24 @@ class Simulation:
         if recorder.wants_frame(cell.time):
             recorder.sample(cell.time, cell.data)
             cell.record(recorder)
+            self._record_belt_windows()
+
+    def _record_belt_windows(self) -> None:
+        """Each belt window a program set, drawn once, and again when it changes."""
+        for belt in self.controller.belts.frames:
+            window = belt.window
+            conveyor = getattr(belt.encoder, "conveyor", None)
+            if window is None or conveyor is None:
+                continue
+            T = belt.nominal.matrix()
+            shown = (window.upstream, window.downstream, T.tobytes())
+            if self._windows_shown.get(id(belt)) == shown:
+                continue
+            self._windows_shown[id(belt)] = shown
+            T[:3, 3] /= 1000.0
+            self.recorder.log_belt_window(belt.name or f"encoder {belt.encoder_number}", self.cell.time,
+                                          self.cell.robot_base_pose() @ T, window.upstream / 1000.0,
+                                          window.downstream / 1000.0, conveyor.width)
 
     def _stop_for_collision(self, collision: dict) -> ProgramError | None:
         """The robot hit something: it stops where it is, and each running program stops with

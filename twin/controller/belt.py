@@ -174,6 +174,13 @@ class BeltMonitor:
         self.cycle_steps = max(1, int(round(VELOCITY_CYCLE_S / dt)))
         self._depth = MAX_VEL_AVG * self.cycle_steps + 1
         self._history: dict[int, deque] = {}
+        self.frames: list[BeltFrame] = []  # the programs' belt frames with a window, for the recording
+
+    def show_window(self, belt: BeltFrame) -> None:
+        """A program set `belt`'s window (V+ WINDOW, a GPL conveyor RefFrame's limits): the
+        recording draws it from the next frame on."""
+        if belt not in self.frames:
+            self.frames.append(belt)
 
     @property
     def encoders(self) -> dict[int, Encoder]:

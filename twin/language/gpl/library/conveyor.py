@@ -90,6 +90,7 @@ class ConveyorFrame:
             belt = BeltFrame(nominal, encoder, 1.0 / encoder.counts_per_mm, name=f"conveyor robot {self.robot}")
             belt.speed_source = rt.robot.belts.speed_of
             belt.window = _reachable(rt, nominal)
+            rt.robot.belts.show_window(belt)
             self._frames[self.robot] = belt
         belt.offset = round(self.offset_mm * encoder.counts_per_mm)
         return belt

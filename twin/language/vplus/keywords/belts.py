@@ -97,6 +97,7 @@ def _window(rt, *items: Any):
     if len(values) < 2 or values[0] is None or values[1] is None or len(values) > 4:
         raise fail(msg.INVALID_ARGUMENT, "WINDOW %belt = upstream, downstream, program, priority")
     belt.window = BeltWindow.between(belt.nominal, location_arg(values[0]), location_arg(values[1]))
+    rt.robot.belts.show_window(belt)
     program = values[2] if len(values) > 2 else None
     priority = WINDOW_PRIORITY if len(values) < 4 or values[3] is None else to_int(values[3])
     belt.on_violation = None if program is None else rt.window_reaction(program, priority)
