@@ -128,7 +128,7 @@ BROKEN_SCENES = [
     ("not-toml", "[robot\nx = 1\n", "Expected ']'"),
     ("missing-sections", '[robot]\nmodel = "x"\n', "missing (required)"),
     ("binary", "\x00\x01\x02", ""),
-    ("not-utf8", "[robot]\nmodel = \"\xff\"\n", "utf-8"),
+    ("not-utf8", "[robot]\nmodel = \"\xff\"\n", "not UTF-8 text"),
     ("empty", "", "robot: missing (required)"),
 ]
 
