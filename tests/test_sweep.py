@@ -132,3 +132,20 @@ def test_ray_cluster_gives_the_local_summary(tmp_path: Path, program: Path):
         assert json.loads(Path(ray_row["report"]).read_text())["parts"] == \
             json.loads(Path(local_row["report"]).read_text())["parts"]
     shutil.rmtree(tmp_path, ignore_errors=True)
+
+
+@pytest.mark.parametrize("extra, says", [
+    (["--first-seed", "-1"], "negative"), (["--max-sim-time", "nan"], "finite"),
+])
+def test_sweep_arguments_are_checked_as_twin_runs_are(tmp_path: Path, program: Path, capsys, extra, says):
+    assert main(["sweep", str(SCENE), str(program), "--out", str(tmp_path / "o"), *extra]) == 2
+    assert says in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
+def test_sweep_refuses_a_missing_program_or_scene_before_any_run(tmp_path: Path, program: Path, capsys):
+    assert main(["sweep", str(SCENE), str(tmp_path / "nope.pg"), "--out", str(tmp_path / "o")]) == 2
+    assert main(["sweep", str(tmp_path), str(program), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "nope.pg" in err and "not a file" in err
+    assert not (tmp_path / "o").exists()

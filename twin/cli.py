@@ -314,6 +314,9 @@ def _sweep(args: argparse.Namespace) -> int:
     except (ValueError, ExpectError) as e:
         print(f"twin sweep: error: {e}", file=sys.stderr)
         return 2
+    for program in args.program:  # as twin run checks them, before any run starts
+        check_program(program)
+    check_input_file(args.scene, "scene")
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         print(f"twin sweep: error: --out {out}: not a folder", file=sys.stderr)
@@ -430,7 +433,7 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("scene", help="cell description")
     sweep.add_argument("program", nargs="+", help="V+ program files or a GPL project folder (as for twin run)")
     sweep.add_argument("--seeds", type=_positive_int, default=1, metavar="N", help="seeds per parameter set")
-    sweep.add_argument("--first-seed", type=int, default=0, metavar="S", help="the first seed (default 0)")
+    sweep.add_argument("--first-seed", type=non_negative_int, default=0, metavar="S", help="the first seed (default 0)")
     sweep.add_argument("--param", action="append", default=[], metavar="KEY=V1,V2,...",
                        help="scene value by dotted key (controller.monitor_speed=50,100; an array of tables "
                        "by name or index: conveyor.infeed.speed=80,100); every combination is run; may be repeated")
@@ -440,7 +443,7 @@ def build_parser() -> argparse.ArgumentParser:
                        help="run on a Ray cluster instead (auto, host:port, or local); needs twin[ray]")
     sweep.add_argument("--out", default="sweep-out", help="folder for the per-run reports and the summary")
     sweep.add_argument("--main", default=None, help="program to execute (as for twin run)")
-    sweep.add_argument("--max-sim-time", type=float, default=3600.0, help="stop each run after this many simulated seconds")
+    sweep.add_argument("--max-sim-time", type=positive_seconds, default=3600.0, help="stop each run after this many simulated seconds")
     sweep.add_argument("--expect", default=None, help="expectations every run must meet (as for twin check)")
     sweep.set_defaults(handler=_sweep)
 
