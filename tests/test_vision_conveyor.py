@@ -1,4 +1,5 @@
-"""The vision-guided conveyor (scenes/conveyor_vision.toml, programs/vplus/conveyor_vision.pg):
+"""The vision-guided conveyor (scenes/conveyor_vision.toml, programs/vplus/conveyor_vision.pg,
+programs/gpl/conveyor_vision/):
 each picture latches the belt encoder at the instant it is taken, so a bar found is known in
 belt coordinates; the program picks every bar the camera saw with belt tracking and places
 it in the tray.  Ground truth (the bars' bodies) is read here only to check."""
@@ -18,6 +19,7 @@ from twin.vision.server import VisionServer
 
 SCENE = ROOT / "scenes" / "conveyor_vision.toml"
 VPLUS = ROOT / "programs" / "vplus" / "conveyor_vision.pg"
+GPL = ROOT / "programs" / "gpl" / "conveyor_vision"
 TIME_LIMIT = "*Simulation time limit reached*"
 BELT_REACH_S = 12.0  # a bar spawned longer ago than this has reached the belt's end unless picked
 
@@ -98,9 +100,10 @@ def test_a_bar_cut_by_the_pictures_edge_is_not_reported():
     assert max(errors) < 0.5
 
 
-def test_the_program_picks_every_bar_the_camera_saw_and_places_it_in_its_cell(tmp_path):
+@pytest.mark.parametrize("program", [VPLUS, GPL], ids=["vplus", "gpl"])
+def test_the_program_picks_every_bar_the_camera_saw_and_places_it_in_its_cell(program, tmp_path):
     report_path = tmp_path / "report.json"
-    run_program(VPLUS, scene=SCENE, report_path=report_path, max_sim_time=40.0)
+    run_program(program, scene=SCENE, report_path=report_path, max_sim_time=40.0)
     report = json.loads(report_path.read_text())
     assert [e["message"].split(" (")[0] for e in report["errors"]] == [TIME_LIMIT]  # the 5-minute run is cut
     counts = report["counts"]
