@@ -44,6 +44,16 @@ class CameraModel:
     residual_max_mm: float = 0.0
     residual_px: float = 0.0
     points: int = 0
+    flange_T: np.ndarray | None = None  # a camera on the robot: its pose in the flange frame (4x4, mm)
+
+    def at_flange(self, flange_mm: np.ndarray) -> "CameraModel":
+        """A camera on the robot with the flange at `flange_mm` (4x4 in the robot frame, mm):
+        the same camera with R, t of that moment."""
+        cam = np.asarray(flange_mm, dtype=float) @ self.flange_T  # camera -> robot
+        R = cam[:3, :3].T
+        return CameraModel(K=self.K, dist=self.dist, R=R, t=-R @ cam[:3, 3], size=self.size,
+                           residual_mm=self.residual_mm, residual_max_mm=self.residual_max_mm,
+                           residual_px=self.residual_px, points=self.points, flange_T=self.flange_T)
 
     @property
     def center_mm(self) -> np.ndarray:
@@ -79,7 +89,8 @@ class CameraModel:
         return {"K": self.K.tolist(), "dist": self.dist.tolist(), "R": self.R.tolist(),
                 "t_mm": self.t.tolist(), "size": list(self.size),
                 "residual_mm": self.residual_mm, "residual_max_mm": self.residual_max_mm,
-                "residual_px": self.residual_px, "points": self.points}
+                "residual_px": self.residual_px, "points": self.points,
+                **({} if self.flange_T is None else {"flange_T_mm": self.flange_T.tolist()})}
 
     def save(self, path: str | Path) -> None:
         Path(path).write_text(json.dumps(self.to_dict(), indent=1) + "\n")
@@ -90,7 +101,7 @@ class CameraModel:
         return cls(K=np.array(d["K"]), dist=np.array(d["dist"]), R=np.array(d["R"]),
                    t=np.array(d["t_mm"]), size=tuple(d["size"]), residual_mm=d["residual_mm"],
                    residual_max_mm=d["residual_max_mm"], residual_px=d["residual_px"],
-                   points=d["points"])
+                   points=d["points"], flange_T=np.array(d["flange_T_mm"]) if "flange_T_mm" in d else None)
 
 
 def find_target(rgb: np.ndarray, hsv_low, hsv_high, min_area_px: float = 20.0) -> np.ndarray | None:

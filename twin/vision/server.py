@@ -99,6 +99,7 @@ class VisionServer:
     clock: object  # () -> simulated seconds
     data: object  # the cell's MjData: what the cameras see
     encoders: dict = field(default_factory=dict)  # the cell's belt encoders, by number
+    flange: object = None  # () -> the flange pose (4x4, mm, robot frame) from the robot's kinematics
     recorder: object = None
     runs: list[Run] = field(default_factory=list)
     _told: dict[tuple[int, int], bool] = field(default_factory=dict, repr=False)
@@ -131,7 +132,7 @@ class VisionServer:
             calibrations[name] = CameraModel.load(path) if path is not None and path.exists() else None
         return cls(processes=processes, cameras={n: Camera(c, cell.model) for n, c in configs.items()},
                    calibrations=calibrations, time_s=time_s, clock=lambda: cell.time, data=cell.data,
-                   encoders=dict(cell.encoders))
+                   encoders=dict(cell.encoders), flange=lambda: _flange_mm(cell))
 
     # ------------------------------------------------------------------ processes
     def process(self, key) -> Process:
@@ -156,6 +157,8 @@ class VisionServer:
         camera_model = self.calibrations.get(process.camera)
         if camera_model is None:
             raise VisionError(NOT_CALIBRATED, f"camera {process.camera!r} (run `twin calibrate` on the cell file)")
+        if camera_model.flange_T is not None:  # on the robot: where the flange is now
+            camera_model = camera_model.at_flange(self.flange())
         now = float(self.clock())
         image = self.cameras[process.camera].shoot(self.data)
         view, results = process.run(image.rgb, camera_model)
@@ -311,6 +314,14 @@ class VisionServer:
             self._listener = None
         for camera in self.cameras.values():
             camera.close()
+
+
+def _flange_mm(cell) -> np.ndarray:
+    """The flange pose in the robot frame (mm) as the controller knows it: its kinematics of
+    the joint positions."""
+    T = cell.kinematics.fk(cell.robot_qpos())
+    T[:3, 3] *= 1000.0
+    return T
 
 
 # One result set on the wire: tab-separated fields.
