@@ -15,6 +15,7 @@ from conftest import ROOT
 from twin.physics.camera import cameras_of
 from twin.physics.cell import Cell
 from twin.physics.geometry import MM, vplus_to_matrix
+from twin.vision.calibrate import calibrate_scene
 from twin.vision.handeye import calibrate_hand_eye, solve_hand_eye
 from twin.vision.server import VisionServer
 
@@ -103,3 +104,15 @@ def test_too_few_pictures_or_one_height_is_refused():
         solve_hand_eye([flange] * 3, [np.zeros((44, 2))] * 3, np.zeros((44, 3)), 0.0, (640, 480))
     with pytest.raises(ValueError, match="heights"):
         solve_hand_eye([flange] * 8, [np.zeros((44, 2))] * 8, np.zeros((44, 3)), 0.0, (640, 480))
+
+
+def test_a_plan_that_does_not_fit_the_camera_is_a_clear_error(tmp_path):
+    text = SCENE.read_text()
+    no_plate = tmp_path / "no_plate.toml"
+    no_plate.write_text(text.replace("plate = [300.0, 20.0, 751.0, 10.0]", ""))
+    with pytest.raises(ValueError, match="camera 'wrist' calibration: a camera on the robot .* give plate"):
+        calibrate_scene(no_plate, "wrist")
+    fixed_with_plate = tmp_path / "fixed.toml"
+    fixed_with_plate.write_text(text.replace("plane_z = 100.0\n", "plane_z = 100.0\nplate = [0.0, 0.0, 0.0, 0.0]\n", 1))
+    with pytest.raises(ValueError, match="camera 'top' calibration: plate is the hand-eye plan"):
+        calibrate_scene(fixed_with_plate, "top")

@@ -93,11 +93,6 @@ class CameraConfig:
         if len(config.distortion) != 5:
             raise ValueError(f"camera {config.name!r}: distortion must be [k1, k2, p1, p2, k3]")
         config.focal  # noqa: B018 (validates focal_px / fov_deg)
-        plan = config.calibration
-        if plan is not None and (plan.plate is None) != (config.mount is None):
-            raise ValueError(f"camera {config.name!r} calibration: " + (
-                "a camera on the robot (mount) is calibrated hand-eye: give plate = [x, y, z, yaw]"
-                if plan.plate is None else "plate is the hand-eye plan of a camera on the robot (give mount)"))
         return config
 
 

@@ -73,6 +73,11 @@ def calibrate_scene(scene_path: str | Path, camera: str | None = None) -> list[t
     for config in cameras_of(cell):
         if config.calibration is None or (camera is not None and config.name != camera):
             continue
+        if (config.calibration.plate is None) != (config.mount is None):
+            raise ValueError(f"{scene_path}: camera {config.name!r} calibration: " + (
+                "a camera on the robot (mount) is calibrated hand-eye: give plate = [x, y, z, yaw]"
+                if config.calibration.plate is None else "plate is the hand-eye plan of a camera on the robot "
+                                                         "(give mount)"))
         if config.mount is not None:  # a camera on the robot: hand-eye, over the plate
             from .handeye import calibrate_hand_eye
 
