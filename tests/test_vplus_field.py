@@ -22,7 +22,7 @@ import numpy as np
 
 from twin.controller import network
 from twin.language.vplus import messages as msg
-from twin.runner import finish_run, start_program
+from twin.runner import finish_run, run_program, start_program
 
 from test_clients_ros import connect, receive
 from test_clients_tcp import ScriptedPeer, free_port
@@ -364,3 +364,54 @@ def test_a_server_in_the_field_drivers_structure_moves_the_robot(tmp_path):
         assert (size, estop) == (20, 0)
         error = np.abs(np.array(joints) - target)
         assert np.degrees(error[[0, 1, 3]]).max() < 0.01 and error[2] < 1e-5
+
+
+# ------------------------------------------------------ command programs (MC lines)
+def test_a_command_program_runs_its_monitor_commands(tmp_path):
+    # An auto-start file's program is a command program: "MC" and a monitor command
+    # on each line ([000] "Auto-Starting Programs With the MCP": the program "is invoked
+    # as though with a COMMANDS monitor command").  Those a program instruction also
+    # does run as that instruction; monitor SPEED sets the monitor speed; LOAD of a
+    # file the run was given does nothing; "mc" is still a variable name.
+    (tmp_path / "cell.v2").write_text('.PROGRAM work()\n    TYPE "working"\n.END\n')
+    (tmp_path / "auto.v2").write_text("""
+.PROGRAM auto()
+    MC LOAD D:\\CELL.V2       ; the module twin run was also given
+    MC DISABLE POWER
+    MC ENABLE POWER
+    MC CALIBRATE
+    MC SPEED 80
+    MC EXECUTE 1 work()
+    TYPE "speed ", SPEED(1), " power ", SWITCH(POWER)
+    mc = 3
+    mc[2] = 4
+    TYPE mc+mc[2]
+    WAIT.EVENT , 0.1
+    MC ZERO
+    TYPE "not reached"
+.END
+""")
+    result = run_program([tmp_path / "auto.v2", tmp_path / "cell.v2"], max_sim_time=5)
+    assert result.report.output == "speed 80 power -1\n7\nworking\n"
+    (error,) = result.report.errors
+    assert error["code"] == msg.DEVICE_NOT_READY and error["line"] == 14
+    assert "MC ZERO: there is no monitor" in error["message"]
+
+
+def test_a_command_program_that_loads_a_file_the_run_lacks_stops_there():
+    system, task = run_vplus('.PROGRAM auto()\n    MC LOAD other.v2\n    TYPE "no"\n.END\n')
+    assert system.console.output == ""
+    assert task.error.code == msg.NONEXISTENT_FILE and task.error.line == 2
+    assert "name this one on its command line" in str(task.error)
+
+
+def test_a_malformed_monitor_command_is_a_located_syntax_error():
+    from twin.errors import ProgramError
+    from twin.language.vplus.parser import parse
+
+    try:
+        parse(".PROGRAM auto()\n    MC EXECUTE 1 (\n.END\n", "auto.v2")
+    except ProgramError as err:
+        assert err.code == msg.SYNTAX_ERROR and err.line == 2 and "monitor command" in str(err)
+    else:
+        raise AssertionError("no error")

@@ -998,6 +998,9 @@ class ProgramCompiler(LibraryStatements):
         self.emit(depth, f"rt.react({signal}, {name!r}, [{self.arguments(args)}], {priority}, "
                          f"immediate={s.name == 'REACTI'})")
 
+    def s_MonitorCommand(self, s: ast.MonitorCommand, depth: int) -> None:
+        self.emit(depth, f"rt.monitor_command({s.command!r}, {s.text!r})")
+
     def s_ExecuteProgram(self, s: ast.ExecuteProgram, depth: int) -> None:
         """EXECUTE [task] program(args)[, cycles[, step]]: arguments by value."""
         task = "None" if s.task is None else self.expr(s.task)
