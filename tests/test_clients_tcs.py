@@ -110,3 +110,27 @@ def test_the_command_set_over_a_raw_socket():
         assert again("attach") == "0 -1"
         again.close()
     assert served.returncode == 0, served.stderr
+
+
+def test_clients_that_leave_mid_command_or_before_the_reply_leave_the_server_serving():
+    with serving(["programs/gpl/tcs", "--scene", "scenes/pf400_plates.toml", "--fast"], [PORT]) as served:
+        port = served.port(PORT)
+        setup = Tcs(port)
+        assert setup("hp 1 10") == "0" and setup("attach 1") == "0" and setup("home") == "0"
+        setup.close()
+        # Half a command, then gone: the half line is dropped with the connection.
+        half = socket.create_connection(("127.0.0.1", port), timeout=60)
+        half.sendall(b"moveJ 1 200 -3")
+        half.close()
+        # A whole motion command, then gone before its reply: the motion still runs to
+        # its end, the reply to nobody is lost, and the server takes the next client.
+        hasty = socket.create_connection(("127.0.0.1", port), timeout=60)
+        hasty.sendall(b"moveJ 1 200 -30 90 -20\n")
+        hasty.close()
+        after = Tcs(port)
+        assert after("nop") == "0"
+        assert after("waitForEom") == "0"
+        assert numbers(after("wherej"))[:4] == pytest.approx([200, -30, 90, -20], abs=0.05)
+        assert after("attach") == "0 -1"
+        after.close()
+    assert served.returncode == 0, served.stderr
