@@ -103,6 +103,14 @@ def test_the_command_set_over_a_raw_socket():
         assert tcs("move x 1") == "-717 *Invalid number format*"
         assert tcs("locXyz 0") == "-707 *Value out-of-range*"
         assert tcs("moveOneAxis 9 1 1") == "-1002 *Invalid axis number*"
+        # No rail on this bench (scenes/pf400_rail.toml has one: test_clients_rail.py).
+        assert tcs("Rail 1 250") == "0" and tcs("Rail 1") == "0 250"  # kept with the station all the same
+        assert tcs("MoveRail 1 1") == "-1002 *Invalid axis number*"
+        assert tcs("MoveRail 0") == "0"  # nothing pending to cancel
+        assert tcs("moveOneAxis 6 100 1") == "-1002 *Invalid axis number*"
+        assert tcs("moveJ 1 200 -30 90 -20 110 50") == "-1002 *Invalid axis number*"
+        assert tcs("moveExtraAxis 100") == "-1002 *Invalid axis number*"
+        assert tcs("MoveRail 1 3") == "-202 *Invalid argument*"
         tcs.close()
 
         # The next client is served.

@@ -322,7 +322,7 @@ def plan_straight_move(kin: RobotKinematics, q0, T1, vmax, amax, cart_speed_max,
     R0 = T0[:3, :3].copy()
     length = float(np.linalg.norm(p1 - p0))
     rotvec = pin.log3(R0.T @ T1[:3, :3])
-    if kin.dof == 4:  # only the rotation about the vertical can be followed; a tilt is an error in ik
+    if kin.arm_dof == 4:  # only the rotation about the vertical can be followed; a tilt is an error in ik
         rotvec = np.array([0.0, 0.0, rotvec[2]]) if kin._tilt_ok(T1[:3, :3] @ untool[:3, :3]) else rotvec
     angle = float(np.linalg.norm(rotvec))
     # The end point first: an unreachable target is reported as such.
@@ -331,7 +331,9 @@ def plan_straight_move(kin: RobotKinematics, q0, T1, vmax, amax, cart_speed_max,
         return Trajectory.still(q0)
     if kin.scara is not None:
         s = kin.scara
-        _segment_clear_of_hole(kin, (T0 @ untool @ s.M4f_inv)[:3, 3], (T1 @ untool @ s.M4f_inv)[:3, 3], config)
+        rail = kin.rail_offset(q0)  # the line is the arm's, from where the rail holds it
+        _segment_clear_of_hole(kin, (T0 @ untool @ s.M4f_inv)[:3, 3] - rail, (T1 @ untool @ s.M4f_inv)[:3, 3] - rail,
+                               config)
 
     n = max(2, int(math.ceil(length / WAYPOINT_SPACING)), int(math.ceil(angle / WAYPOINT_ANGLE))) + 1
     for attempt in range(MAX_REFINEMENTS + 1):

@@ -42,7 +42,8 @@ def _const(*values) -> Callable[[Any], list]:
 
 
 def _axes(rt) -> int:
-    return rt.robot.kin.dof
+    from .state import axis_count  # noqa: PLC0415 - as _soft_limits
+    return axis_count(rt)
 
 
 def _soft_limits(which: int) -> Callable[[Any], list]:
