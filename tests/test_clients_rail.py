@@ -74,6 +74,7 @@ def pose(x, y, z, yaw=0.0) -> PreciseFlexCartesianCoords:
 async def session(log: dict, port: int) -> None:
     arm = PreciseFlex400Backend(host="127.0.0.1", port=port, has_rail=True, timeout=20)
     await arm.setup()
+    log["axes"] = [await arm.send_command(f"pd {data_id} 1") for data_id in (2000, 2003, 16077)]
     log["start"] = await arm.get_joint_position()
     # Two stations at the bench's ends, with their rail positions.
     await arm.set_location_xyz(1, pose(350.0, -700.0, -12.8))
@@ -113,6 +114,8 @@ def test_pylabrobot_moves_the_rail_to_pick_and_place_across_the_bench(tmp_path):
         asyncio.run(asyncio.wait_for(session(log, served.port(PORT)), timeout=300))
     assert served.returncode == 0, served.stderr
 
+    # Six axes, the mask of axes 1-4 and 6, the rail's soft limits last.
+    assert log["axes"] == ["6", "47", "401.5,93,348,960,0,500"]
     assert log["start"][PFAxis.RAIL] == pytest.approx(0.0, abs=0.05)
     assert log["rail_1"] == -400.0
     assert log["too_far"] == -1025  # the arm alone does not reach it

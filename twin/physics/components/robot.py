@@ -63,10 +63,9 @@ class Robot(Component):
         root.add_joint(name=rail.name, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=list(rail.direction),
                        range=[rail.lower, rail.upper], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
                        damping=1.0, armature=0.1)
-        for kind, gain in (("pos", dict(kp=100000.0)), ("vel", dict(kv=2000.0))):
-            actuator = spec.add_actuator(name=f"{rail.name}_{kind}", target=rail.name,
-                                         trntype=mujoco.mjtTrn.mjTRN_JOINT)
-            getattr(actuator, "set_to_position" if kind == "pos" else "set_to_velocity")(**gain)
+        joint = mujoco.mjtTrn.mjTRN_JOINT
+        spec.add_actuator(name=f"{rail.name}_pos", target=rail.name, trntype=joint).set_to_position(kp=100000.0)
+        spec.add_actuator(name=f"{rail.name}_vel", target=rail.name, trntype=joint).set_to_velocity(kv=2000.0)
         d = np.asarray(rail.direction)
         centre = self.base_T[:3, 3] + self.base_T[:3, :3] @ d * (rail.lower + rail.upper) / 2
         length = (rail.upper - rail.lower) / 2 + RAIL_BEAM_END
