@@ -222,3 +222,26 @@ def test_a_client_that_leaves_mid_message_leaves_the_server_serving_the_next():
     assert "client left (30 bytes of a message dropped)" in output
     assert output.count("client connected") == 2
     assert run.result.report.errors == []
+
+
+def test_a_state_client_that_leaves_leaves_the_feedback_serving_the_next():
+    seen = []
+
+    def client(run: Run):
+        first = connect(STATE_PORT)
+        seen.append(receive_message(first)[0])
+        receive(first, 7)  # part of the next message, then gone
+        first.close()
+        second = connect(STATE_PORT)
+        feedback = Feedback(second)
+        joints, status = feedback.after(0)
+        seen.append((joints, status, run.measured()))
+        second.close()
+
+    run = Run(client)
+    first_kind, (joints, status, measured) = seen
+    assert first_kind in (JOINT_POSITION, STATUS)
+    assert float32_of_a_cycle(joints, run.history) <= 1.0  # the next client is fed the simulated joints
+    assert np.abs(np.array(joints[:4]) - measured).max() < 1e-3  # at rest: the same pose
+    assert status == (1, 0, 0, 0, 0, 2, 1)
+    assert run.result.report.errors == []

@@ -108,9 +108,11 @@ class Robot(Component):
         self._jacp = np.zeros((3, m.nv))
 
     def home(self, location: list[float]) -> None:
-        """Put the robot at the IK of `location` (RIGHTY), held there by its servos."""
+        """Put the robot at the IK of `location` (RIGHTY), held there by its servos; a rail
+        at 0, where the scene's base pose puts the base."""
         kin, d = self.kinematics, self.data
         seed = np.where(np.isfinite(kin.lower + kin.upper), (kin.lower + kin.upper) / 2, 0.0)
+        seed[kin.arm_dof:] = 0.0
         q = kin.ik(vplus_to_matrix(location), seed, righty=True)
         d.qpos[self.qadr] = q
         d.ctrl[self.act_pos] = q
