@@ -306,8 +306,9 @@ class RobotKinematics:
 
     def is_righty(self, q: np.ndarray) -> bool:
         """SCARA arm configuration: RIGHTY when the elbow turns link 2 counter-clockwise
-        from link 1 seen from above (for the Cobra model: J2 > 0, for the PF400: J3 > 0; the
-        stretched arm counts as RIGHTY).  Robots without an elbow configuration report True."""
+        from link 1 seen from above (for the Cobra model: J2 > 0, for the PF400: J3 below
+        180 deg; the stretched arm counts as RIGHTY).  Robots without an elbow
+        configuration report True."""
         if self.scara is None:
             return True
         return bool(self.scara.elbow(q[self.scara.elbow_joint]) >= 0.0)
