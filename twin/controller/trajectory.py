@@ -266,10 +266,12 @@ def _segment_clear_of_hole(kin: RobotKinematics, P0: np.ndarray, P1: np.ndarray,
     elbow = s.elbow_joint
     # The elbow angles the joint range allows in this configuration (a range may hold
     # the folded arm, as the PF400's J3 does, 12 to 348 deg): the most folded one.
-    q = np.linspace(kin.lower[elbow], kin.upper[elbow], 721)
-    g = s.elbow(q)
-    g = g[g >= 0.0] if righty else -g[g < 0.0]
-    fold = float(g.max()) if len(g) else 0.0
+    g = s.elbow(np.linspace(kin.lower[elbow], kin.upper[elbow], 721))
+    if np.any(np.abs(np.diff(g)) > math.pi):  # the wrapped angle jumps: the range passes the fold
+        fold = math.pi
+    else:
+        g = g[g >= 0.0] if righty else -g[g < 0.0]
+        fold = float(g.max()) if len(g) else 0.0
     r_min = math.sqrt(max(s.l1 ** 2 + s.l2 ** 2 + 2 * s.l1 * s.l2 * math.cos(fold), 0.0))
     a, b = P0[:2] - s.p1, P1[:2] - s.p1
     d = b - a
