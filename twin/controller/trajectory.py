@@ -34,12 +34,13 @@ if TYPE_CHECKING:
     from scipy.interpolate import PPoly
 
 # toppra grid points (cosine spacing, see `_grid`), each costing about 10 us of toppra's
-# Python loop, chosen by measurement against a fine grid over 200 random Cobra motions
-# (docs/performance.md): every motion within 0.5 % of its time-optimal duration.
-N_GRID_JOINT = 8  # joint-space line, refined once at the profile's corners: at most 0.11 % longer
+# Python loop, chosen by measurement against a 400-point grid over 200 random Cobra
+# motions (`bench/planning.py --grid-error`, docs/performance.md): every motion within
+# 0.5 % of its duration there.
+N_GRID_JOINT = 8  # joint-space line, refined once at the profile's corners: at most 0.13 % longer
 REFINE_CELLS = 4  # that refinement: each cell at a corner cut into this many
 END_FRACTIONS = np.array([1e-4, 1e-3, 5e-3])  # grid points this near either end, see `_grid`
-N_GRID_STRAIGHT = 80  # straight line: at most 0.39 % longer, 0.10 % on average
+N_GRID_STRAIGHT = 80  # straight line: at most 0.33 % longer, 0.08 % on average
 LINE_TOLERANCE = 0.05e-3  # m: target deviation of a straight-line motion (the contract is 0.1 mm)
 WAYPOINT_SPACING = 0.010  # m: first try of the straight-line waypoint spacing
 WAYPOINT_ANGLE = math.radians(5.0)  # rad: same, for the orientation
