@@ -10,6 +10,7 @@ from twin.controller.kinematics import (
     JOINT_LIMIT,
     LOCATION_OUT_OF_RANGE,
     KinematicsError,
+    LinearRail,
     RobotKinematics,
 )
 from twin.controller.location import Location
@@ -202,12 +203,14 @@ def _line_poses(kin, q0, p1, yaw_deg, n):
     return out
 
 
-@pytest.mark.parametrize("robot", ["cobra_s600", "pf400", "cartesian_gantry"])
+@pytest.mark.parametrize("robot", ["cobra_s600", "pf400", "pf400 on a rail", "cartesian_gantry"])
 def test_ik_path_is_ik_pose_by_pose_each_seeded_by_the_last(robot):
     """`ik_path` (the vectorised closed form of a SCARA's straight line) gives what `ik`
     gives pose by pose, continuous, each seeded by the previous one: the same turn of the
-    multi-turn wrist across +/-180 deg, the same arm configuration."""
-    kin = RobotKinematics.from_mjcf(ROOT / "models" / "robots" / f"{robot}.xml")
+    multi-turn wrist across +/-180 deg, the same arm configuration, a rail held still."""
+    rail = LinearRail(direction=(0.0, 1.0, 0.0), lower=-0.5, upper=0.5, max_velocity=0.75, max_acceleration=1.0,
+                      axis_number=6) if robot.endswith("rail") else None
+    kin = RobotKinematics.from_mjcf(ROOT / "models" / "robots" / f"{robot.split()[0]}.xml", rail=rail)
     rng = np.random.default_rng(3)
     checked = 0
     while checked < 20:

@@ -402,10 +402,13 @@ class RobotKinematics:
         """`ik_path` for a SCARA; None when a pose needs `ik`'s own handling."""
         s = self.scara
         tilt_ok = Ts[:, 2, :3] @ self._home_rotation[2, :] >= math.cos(TILT_TOLERANCE)
-        raw1, raw2, q3, psi, c = s.closed_form(Ts, righty)
+        arm = Ts.copy()
+        arm[:, :3, 3] -= self.rail_offset(seed)  # the arm reaches the poses from where the rail is
+        raw1, raw2, q3, psi, c = s.closed_form(arm, righty)
         if not (np.all(tilt_ok) and np.all(np.abs(c) <= 1 + 1e-12)):
             return None
-        Q = np.empty((len(Ts), 4))
+        Q = np.empty((len(Ts), self.dof))
+        Q[:, self.arm_dof:] = seed[self.arm_dof:]  # a rail stays where it is
         Q[:, s.slide] = q3
         q1, q4 = float(seed[s.shoulder]), float(seed[s.wrist])
         for k, pose in enumerate(zip(raw1.tolist(), raw2.tolist(), psi.tolist())):
