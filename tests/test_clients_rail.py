@@ -10,6 +10,7 @@ from __future__ import annotations
 import asyncio
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -24,6 +25,7 @@ from clients_helpers import serving
 from twin.controller.kinematics import KinematicsError, LinearRail, RobotKinematics
 from twin.controller.trajectory import plan_straight_move
 from twin.physics.geometry import vplus_to_matrix
+from twin.runner import run_program
 
 PORT = 10100
 SCENE = "scenes/pf400_rail.toml"
@@ -142,3 +144,14 @@ def test_pylabrobot_moves_the_rail_to_pick_and_place_across_the_bench(tmp_path):
     x, y, z = plate["pose"][:3]
     assert math.hypot(x - 350.0, y - 700.0) < 2.0  # mm: on the far nest, 1.4 m from where it was
     assert z == pytest.approx(770.0 + 14.35 / 2, abs=0.5)
+
+
+def test_a_gpl_program_sees_the_rail_as_axis_6_and_cartesian_positions_include_it():
+    result = run_program(Path(__file__).parent / "data" / "gpl" / "pf400_rail", scene=SCENE)
+    assert result.report.errors == []
+    assert result.report.output.splitlines() == [
+        "axes 6",
+        "rail -400 y -400",  # the rail alone: the flange rides along
+        "rail -400 y -600",  # a Cartesian move: the arm reaches, the rail stays
+        "rail 250 y 50",  # an Angles location with Angle(6): the rail moves with the arm
+    ]
