@@ -17,7 +17,10 @@ Entity layout in the viewer::
     program/log                       TYPE output line by line at its time, and errors (TextLog)
     program/task<n>/line              the program line task n is at, when it changes (TextLog)
     program/task<n>/line_number       the same line as a number (scalar)
+    program/thread_<name>/line, .../line_number   the same for each GPL thread
     world/tcp                         the tool tip at each frame (Points3D: its path over time)
+    world/plan                        the tool tip's path as planned, for each motion at the
+                                      simulated time it was planned (LineStrips3D)
     world/regions/<name>              the scene's regions (Boxes3D, static)
     world/locations/<name>            the taught locations (Transform3D axes, static)
     gripper/closed, gripper/force_n   the hand's state and its grip force on the held part
@@ -45,7 +48,7 @@ import numpy as np
 import rerun as rr
 import trimesh
 
-__all__ = ["Recorder", "geom_mesh"]
+__all__ = ["Recorder", "geom_mesh", "entity_part"]
 
 TIMELINE = "sim_time"
 PLANE_HALF_SIZE = 2.0   # metres: an infinite MuJoCo plane (size 0) is drawn this big
@@ -55,7 +58,8 @@ def _name(model: mujoco.MjModel, objtype, i: int, prefix: str) -> str:
     return mujoco.mj_id2name(model, objtype, i) or f"{prefix}{i}"
 
 
-def _part(text: str) -> str:
+def entity_part(text: str) -> str:
+    """`text` as one part of an entity path (slashes, spaces... escaped)."""
     return rr.escape_entity_path_part(text)
 
 
@@ -159,7 +163,7 @@ class Recorder:
         self._joints = np.flatnonzero((jt == mujoco.mjtJoint.mjJNT_HINGE) | (jt == mujoco.mjtJoint.mjJNT_SLIDE))
         self._joint_qadr = model.jnt_qposadr[self._joints]
         self._joint_scale = np.where(jt[self._joints] == mujoco.mjtJoint.mjJNT_HINGE, 180.0 / math.pi, 1000.0)
-        self._joint_paths = ["robot/joints/" + _part(_name(model, mujoco.mjtObj.mjOBJ_JOINT, j, "joint"))
+        self._joint_paths = ["robot/joints/" + entity_part(_name(model, mujoco.mjtObj.mjOBJ_JOINT, j, "joint"))
                              for j in self._joints]
 
         n, nb, nj = self.chunk_frames, len(self._moving), len(self._joints)
@@ -185,7 +189,7 @@ class Recorder:
         used: set[str] = set()
         paths = ["world"]
         for b in range(1, m.nbody):
-            name = _part(_name(m, mujoco.mjtObj.mjOBJ_BODY, b, "body"))
+            name = entity_part(_name(m, mujoco.mjtObj.mjOBJ_BODY, b, "body"))
             while name in used:
                 name = f"{name}_{b}"
             used.add(name)
@@ -222,7 +226,7 @@ class Recorder:
             if mesh is None or len(mesh.faces) == 0:
                 continue
             b = m.geom_bodyid[g]
-            name = _part(_name(m, mujoco.mjtObj.mjOBJ_GEOM, g, "geom"))
+            name = entity_part(_name(m, mujoco.mjtObj.mjOBJ_GEOM, g, "geom"))
             if b == 0:
                 while name in used:
                     name = f"{name}_{g}"
@@ -302,10 +306,19 @@ class Recorder:
             T = Location(*values).matrix()
             T[:3, 3] /= 1000.0
             W = base @ T
-            self.rec.log(f"world/locations/{_part(name)}", rr.Transform3D(
+            self.rec.log(f"world/locations/{entity_part(name)}", rr.Transform3D(
                 translation=W[:3, 3], mat3x3=W[:3, :3]), static=True)
-            self.rec.log(f"world/locations/{_part(name)}", rr.TransformAxes3D(0.05), static=True)
+            self.rec.log(f"world/locations/{entity_part(name)}", rr.TransformAxes3D(0.05), static=True)
         self._tcp_site = cell.gripper.tcp_site
+
+    def log_plan(self, sim_time: float, points: np.ndarray, label: str) -> None:
+        """A motion's planned tool-tip path (world, metres) from `sim_time` on (sent at once:
+        a few motions a second at most)."""
+        if not self.enabled or self._closed:
+            return
+        self.rec.set_time(TIMELINE, duration=sim_time)
+        self.rec.log("world/plan", rr.LineStrips3D([points], labels=[label], colors=[(255, 160, 0)],
+                                                   radii=rr.Radius.ui_points(1.5)))
 
     def log_belt_window(self, name: str, sim_time: float, world_T: np.ndarray, upstream_m: float,
                         downstream_m: float, width_m: float) -> None:
@@ -314,7 +327,7 @@ class Recorder:
         if not self.enabled or self._closed:
             return
         self.rec.set_time(TIMELINE, duration=sim_time)
-        path = f"world/belts/{_part(name)}"
+        path = f"world/belts/{entity_part(name)}"
         self.rec.log(path, rr.Transform3D(translation=world_T[:3, 3], mat3x3=world_T[:3, :3]))
         self.rec.log(f"{path}/window", rr.Boxes3D(
             centers=[[(upstream_m + downstream_m) / 2, 0.0, 0.002]],
