@@ -4,6 +4,13 @@ parked parts sent once rather than every frame."""
 
 from __future__ import annotations
 
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -154,3 +161,52 @@ def test_the_line_trace_of_gpl_threads(tmp_path):
     assert [v[0] for v in main["Scalars:scalars"]] == [13.0, 15.0]
     assert 1.0 <= main["sim_time"][1] * 1e-9 <= 1.0 + 0.033
     assert len(timed(rrd["/world/plan"])["sim_time"]) == 1
+
+
+RERUN_CLI = Path(sys.executable).parent / "rerun"
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _wait_listening(port: int, server: subprocess.Popen, seconds: float = 30.0) -> None:
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        assert server.poll() is None, server.stderr.read()
+        with socket.socket() as s:
+            if s.connect_ex(("127.0.0.1", port)) == 0:
+                return
+        time.sleep(0.1)
+    raise AssertionError(f"no rerun server on port {port} after {seconds} s")
+
+
+@pytest.mark.skipif(not RERUN_CLI.exists(), reason="rerun CLI not in this environment")
+def test_twin_run_connect_streams_to_a_running_server(tmp_path):
+    """`twin run --connect ADDR` streams the run to a Rerun gRPC server already listening
+    (the rerun CLI, headless: it saves what it receives), with no display and no --rrd."""
+    port, saved = _free_port(), tmp_path / "received.rrd"
+    server = subprocess.Popen([RERUN_CLI, "--save", saved, "--bind", "127.0.0.1", "--port", str(port)],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        _wait_listening(port, server)
+        program = tmp_path / "c.pg"
+        program.write_text('.PROGRAM c()\n    TYPE "hello"\n    MOVE place\n.END\n')
+        run = subprocess.run([sys.executable, "-m", "twin.cli", "run", program, "--quiet",
+                              "--connect", f"rerun+http://127.0.0.1:{port}/proxy"],
+                             capture_output=True, text=True, cwd=tmp_path, timeout=300,
+                             env={**os.environ, "MUJOCO_GL": "egl", "DISPLAY": ""})
+        assert run.returncode == 0, run.stderr
+        assert run.stdout.splitlines()[0] == "hello"
+        assert sorted(tmp_path.glob("*.rrd")) == [saved]   # twin itself wrote no file
+    finally:
+        server.send_signal(signal.SIGINT)   # the CLI finishes its file on Ctrl-C
+        server.wait(timeout=30)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")     # a streamed file has no footer: read it whole
+        rrd = read_rrd(saved)
+    texts = [t[0] for t in timed(rrd["/program/log"])["TextLog:text"]]
+    assert texts[1:] == ["hello"] and texts[0].startswith("twin run ")
+    assert {"/world/tcp", "/world/plan", "/robot/joints/j1", "/world/link2"} <= set(rrd)
