@@ -41,10 +41,8 @@ def test_a_relative_path_that_does_not_exist_is_looked_up_among_the_resources(tm
     assert find_user_file("nothing/here.pg") == Path("nothing/here.pg")
 
 
-@pytest.fixture(scope="module")
-def installed(tmp_path_factory) -> Path:
-    """A fresh venv with the wheel built from this checkout; returns its bin/ folder."""
-    work = tmp_path_factory.mktemp("wheel")
+def build_wheel(work: Path) -> Path:
+    """The wheel of (a copy of) this checkout, built in `work` without build isolation."""
     src = work / "src"
     src.mkdir()
     for name in SOURCES:
@@ -57,7 +55,14 @@ def installed(tmp_path_factory) -> Path:
     subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "--no-build-isolation",
                     "--disable-pip-version-check", "-w", str(dist), "."], cwd=src, check=True)
     (wheel,) = dist.glob("twin-*.whl")
+    return wheel
 
+
+@pytest.fixture(scope="module")
+def installed(tmp_path_factory) -> Path:
+    """A fresh venv with the wheel built from this checkout; returns its bin/ folder."""
+    work = tmp_path_factory.mktemp("wheel")
+    wheel = build_wheel(work)
     venv = work / "venv"
     subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True)
     site = Path(sysconfig.get_paths(vars={"base": str(venv), "platbase": str(venv)})["purelib"])
