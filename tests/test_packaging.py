@@ -78,7 +78,7 @@ def installed(tmp_path_factory) -> Path:
     return venv / "bin"
 
 
-def _clean_env() -> dict:
+def clean_env() -> dict:
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME", "VIRTUAL_ENV")}
     env.setdefault("MUJOCO_GL", "egl")
     return env
@@ -89,7 +89,7 @@ def test_the_installed_package_is_the_wheels_and_knows_its_version(installed, tm
         [str(installed / "python"), "-c",
          "import sys, twin, twin.resources as r; print(twin.__file__); print(r.resource_root()); "
          "print(any(p.rstrip('/') == sys.argv[1] for p in sys.path))", str(ROOT)],
-        cwd=tmp_path, env=_clean_env(), capture_output=True, text=True, check=True)
+        cwd=tmp_path, env=clean_env(), capture_output=True, text=True, check=True)
     module, resources, repo_on_path = probe.stdout.split("\n")[:3]
     venv = installed.parent
     assert Path(module).is_relative_to(venv) and Path(resources).is_relative_to(venv)
@@ -103,7 +103,7 @@ def test_the_installed_package_is_the_wheels_and_knows_its_version(installed, tm
 def test_the_bundled_demo_runs_from_an_empty_directory(installed, tmp_path, program):
     run = subprocess.run(
         [str(installed / "twin"), "run", program, "--max-sim-time", "6", "--report", "report.json"],
-        cwd=tmp_path, env=_clean_env(), capture_output=True, text=True)
+        cwd=tmp_path, env=clean_env(), capture_output=True, text=True)
     assert "Traceback" not in run.stderr
     report = json.loads((tmp_path / "report.json").read_text())
     # Stopped by the time limit (and only by it), having put parts on the belt and in the bin.

@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 
 from conftest import ROOT
-from test_packaging import build_wheel
+from test_packaging import build_wheel, clean_env
 
 pytestmark = pytest.mark.slow
 
@@ -51,18 +51,12 @@ def venv310(tmp_path_factory) -> Path:
     return venv / "bin"
 
 
-def _env() -> dict:
-    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME", "VIRTUAL_ENV")}
-    env.setdefault("MUJOCO_GL", "egl")
-    return env
-
-
 def test_the_wheel_on_python_310_imports_with_the_older_dependencies(venv310, tmp_path):
     probe = subprocess.run(
         [str(venv310 / "python"), "-c",
          "import sys, mujoco, numpy, rerun, twin, twin.notebook, twin.recorder, twin.check, twin.sweep; "
          "print('.'.join(map(str, sys.version_info[:2])), mujoco.__version__, twin.__file__, sep='\\n')"],
-        cwd=tmp_path, env=_env(), capture_output=True, text=True)
+        cwd=tmp_path, env=clean_env(), capture_output=True, text=True)
     assert probe.returncode == 0, probe.stderr
     version, mujoco_version, module = probe.stdout.splitlines()[-3:]
     assert version == "3.10" and mujoco_version.startswith("3.")
@@ -73,7 +67,7 @@ def test_the_demo_runs_and_records_on_python_310(venv310, tmp_path):
     run = subprocess.run(
         [str(venv310 / "twin"), "run", "programs/vplus/move_parts.pg", "--max-sim-time", "6",
          "--report", "report.json", "--rrd", "run.rrd"],
-        cwd=tmp_path, env=_env(), capture_output=True, text=True, timeout=600)
+        cwd=tmp_path, env=clean_env(), capture_output=True, text=True, timeout=600)
     assert "Traceback" not in run.stderr, run.stderr
     report = json.loads((tmp_path / "report.json").read_text())
     assert run.returncode == 1   # stopped by the time limit, and only by it
