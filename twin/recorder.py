@@ -370,20 +370,18 @@ class Recorder:
         if k == 0:
             return
         times = [rr.TimeColumn(TIMELINE, duration=self._t[:k].copy())]
-        quat_xyzw = self._quat[:k][:, :, [1, 2, 3, 0]]
-        for i, b in enumerate(self._moving):
-            # Only the frames where the body's pose changed: a parked or sleeping part costs nothing.
-            pos, quat = self._pos[:k, i], self._quat[:k, i]
-            previous_pos = np.vstack([self._sent_pos[i:i + 1], pos[:-1]])
-            previous_quat = np.vstack([self._sent_quat[i:i + 1], quat[:-1]])
-            changed = np.any(pos != previous_pos, axis=1) | np.any(quat != previous_quat, axis=1)
-            if not changed.any():
-                continue
-            self._sent_pos[i], self._sent_quat[i] = pos[-1], quat[-1]
-            self.rec.send_columns(self._body_paths[b],
-                                  indexes=[rr.TimeColumn(TIMELINE, duration=self._t[:k][changed])],
-                                  columns=rr.Transform3D.columns(translation=pos[changed],
-                                                                 quaternion=quat_xyzw[changed, i]))
+        pos, quat = self._pos[:k], self._quat[:k]
+        # Only the frames where a body's pose changed: a parked or sleeping part costs nothing
+        # (one comparison for all bodies; NaN, never sent, differs from everything).
+        changed = (np.any(pos != np.concatenate([self._sent_pos[None], pos[:-1]]), axis=2)
+                   | np.any(quat != np.concatenate([self._sent_quat[None], quat[:-1]]), axis=2))
+        self._sent_pos[:], self._sent_quat[:] = pos[-1], quat[-1]
+        for i in np.flatnonzero(changed.any(axis=0)):
+            rows = changed[:, i]
+            self.rec.send_columns(self._body_paths[self._moving[i]],
+                                  indexes=[rr.TimeColumn(TIMELINE, duration=self._t[:k][rows])],
+                                  columns=rr.Transform3D.columns(translation=pos[rows, i],
+                                                                 quaternion=quat[rows, i][:, [1, 2, 3, 0]]))
         if self._tcp_site is not None:
             self.rec.send_columns("world/tcp", indexes=times,
                                   columns=rr.Points3D.columns(positions=self._tcp[:k]))
