@@ -28,6 +28,7 @@ class ProgramTrace:
         self._chunks = 0          # console chunks already read
         self._partial = ""        # typed text after the last line break
         self._where: dict[str, tuple[str, int] | None] = {}
+        self._thread_entities: dict[int, str] = {}   # escaping a name costs more than the lookup
         if simulation is not None:
             simulation.controller.on_plan = PlanTrace(recorder, simulation.cell).plan
 
@@ -62,7 +63,10 @@ class ProgramTrace:
         for thread in getattr(system, "threads", ()):
             found = None if thread.finished else thread.current_location()
             where = None if found is None else (found["program"], found["line"], found["text"])
-            positions[f"program/thread_{entity_part(thread.name)}"] = where
+            entity = self._thread_entities.get(id(thread))
+            if entity is None:
+                entity = self._thread_entities[id(thread)] = f"program/thread_{entity_part(thread.name)}"
+            positions[entity] = where
         return positions
 
     def close(self, t: float) -> None:
