@@ -415,3 +415,23 @@ def test_a_malformed_monitor_command_is_a_located_syntax_error():
         assert err.code == msg.SYNTAX_ERROR and err.line == 2 and "monitor command" in str(err)
     else:
         raise AssertionError("no error")
+
+
+# ------------------------------------------------------- device error variables
+def test_the_error_variable_of_setdevice_and_device_receives_the_status(tmp_path):
+    # [001] "Using DEVICE and SETDEVICE": SETDEVICE (0, unit, error, command) and
+    # DEVICE(0, unit, error, select) name a variable for the device's error status, which
+    # a program does not set beforehand; the twin's encoders report no error (0).
+    program = tmp_path / "enc.pg"
+    program.write_text("""
+.PROGRAM enc()
+    SETDEVICE (0, 0, err, 0)
+    SETDEVICE (0, 0, err, 8) 0.5
+    TYPE "setdevice ", err
+    x = DEVICE(0, 0, status[1], 1)
+    TYPE "device ", status[1], " ", DEFINED(x)
+.END
+""")
+    result = run_program(program, scene="scenes/scara_conveyor.toml", max_sim_time=1)
+    assert result.report.output == "setdevice 0\ndevice 0 -1\n"
+    assert [e["code"] for e in result.report.errors] == [None]  # only the time limit
