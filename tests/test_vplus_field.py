@@ -405,7 +405,7 @@ def test_a_command_program_that_loads_a_file_the_run_lacks_stops_there():
     assert "name this one on its command line" in str(task.error)
 
 
-def test_a_malformed_monitor_command_is_a_located_syntax_error():
+def test_a_malformed_monitor_command_is_a_located_error():
     from twin.errors import ProgramError
     from twin.language.vplus.parser import parse
 
@@ -415,6 +415,10 @@ def test_a_malformed_monitor_command_is_a_located_syntax_error():
         assert err.code == msg.SYNTAX_ERROR and err.line == 2 and "monitor command" in str(err)
     else:
         raise AssertionError("no error")
+    # "MC" and nothing else (blanks, a comment) is MCS abbreviated, absent like MCS
+    for line in ("MC ", "MC \t", "MC   ; nothing"):
+        system, task = run_vplus(f'.PROGRAM auto()\n    TYPE "a"\n    {line}\n.END\n')
+        assert task.error.code == msg.DEVICE_NOT_READY and task.error.line == 3 and system.console.output == "a\n"
 
 
 # ------------------------------------------------------- device error variables
