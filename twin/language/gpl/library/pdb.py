@@ -42,9 +42,45 @@ def _const(*values) -> Callable[[Any], list]:
     return lambda rt: list(values)
 
 
+GRIPPER_AXIS = 5  # a PreciseFlex servo gripper is the controller's axis 5
+
+
+def _figure(rt, name: str, default=None):
+    """A figure of the robot model for the controller (the model's `<model>/gpl_<name>`)."""
+    return rt.robot.kin.controller_figures.get(name, default)
+
+
 def _axes(rt) -> int:
+    """The controller's axes: the twin's joints and a servo gripper's axis 5 (a PF400: 5, on
+    a rail 6, as the field unit's DataID 2000 says)."""
     from .state import axis_count  # noqa: PLC0415 - as _soft_limits
-    return axis_count(rt)
+    if _figure(rt, "gripper_axis") is None:
+        return axis_count(rt)
+    return max(axis_count(rt), GRIPPER_AXIS)
+
+
+def _per_axis(joint_values: Callable[[Any], np.ndarray], gripper_slot: int) -> Callable[[Any], list]:
+    """One value per controller axis, axis 1 first: the joints' (in GPL units: degrees, mm)
+    and, for a servo gripper, its figure `gripper_axis[gripper_slot]` as axis 5."""
+    def values(rt) -> list:
+        from .state import to_gpl_angles  # noqa: PLC0415 - state imports numpy arrays of the model
+        per_axis = to_gpl_angles(rt, joint_values(rt.robot.kin)) + [0.0] * _axes(rt)
+        gripper = _figure(rt, "gripper_axis")
+        if gripper is not None:
+            per_axis[GRIPPER_AXIS - 1] = float(gripper[gripper_slot])
+        # Rounded to a micro-unit: the model stores radians, the database degrees.
+        return [round(v, 6) for v in per_axis[:_axes(rt)]]
+    return values
+
+
+def _figures(name: str, default: list) -> Callable[[Any], list]:
+    return lambda rt: [float(v) for v in _figure(rt, name, default)]
+
+
+def _cartesian_speed(rt) -> list:
+    """100 % Cartesian speeds: the straight-line speed the twin plans with (the scene's
+    `cartesian_speed_mm_s`), then the model's rotation figures."""
+    return [float(rt.robot.settings.cartesian_speed_mm_s)] + _figures("cartesian_speed", [0.0, 0.0, 0.0])(rt)[1:]
 
 
 def _power_state(rt) -> int:
@@ -68,13 +104,11 @@ def _link_lengths(rt) -> list:
 
 
 def _soft_limits(which: int) -> Callable[[Any], list]:
-    """Joint soft limits in GPL units (degrees, mm) from the robot model."""
-    def limits(rt) -> list:
-        from .state import to_gpl_angles  # noqa: PLC0415 - state imports numpy arrays of the model
-        kin = rt.robot.kin
-        # Rounded to a micro-unit: the model stores radians, the database degrees.
-        return [round(v, 6) for v in to_gpl_angles(rt, kin.upper if which > 0 else kin.lower)]
-    return limits
+    """Joint soft limits in GPL units (degrees, mm) from the robot model, a servo gripper's
+    as axis 5."""
+    if which > 0:
+        return _per_axis(lambda kin: kin.upper, 1)
+    return _per_axis(lambda kin: kin.lower, 0)
 
 
 def _mounted_tool(rt) -> list:
@@ -94,8 +128,11 @@ def _mounted_tool(rt) -> list:
 TABLE: dict[int, Entry] = {
     100: Entry("Controller manufacturer", "str", 1, _const("Brooks Automation"), READ_ONLY),  # PDB
     101: Entry("Controller model", "str", 1, _const("twin"), READ_ONLY),  # PDB
+    102: Entry("Hardware version", "str", 1, _const("twin"), READ_ONLY),  # PyLabRobot DataIDs
     103: Entry("Full software version", "str", 1, _const("GPL 4.2 (twin digital twin)"), READ_ONLY),  # PDB
     104: Entry("Software version", "int", 1, _const(4), READ_ONLY),  # PDB
+    110: Entry("Controller serial number", "str", 1, _const("TWIN-C0001"), READ_ONLY),  # PyLabRobot DataIDs
+    116: Entry("Robot type", "int", 1, lambda rt: [int(_figure(rt, "robot_type", [0])[0])], READ_ONLY),  # PyLabRobot
     125: Entry("Serial console enable", "bool", 1, _const(True)),  # manual L2859
     323: Entry("Error log file", "str", 1, _const("")),  # manual L3018
     424: Entry("Vision server IP address", "str", 1, _const("127.0.0.1")),  # manual L3094
@@ -106,12 +143,27 @@ TABLE: dict[int, Entry] = {
     2000: Entry("Number of axes", "int", 1, lambda rt: [_axes(rt)], READ_ONLY, robot=True),  # PDB
     2002: Entry("Robot Name", "str", 1, _const("Robot 1"), robot=True),  # PDB
     2003: Entry("Axis Mask", "int", 1, lambda rt: [_axis_mask(rt)], READ_ONLY, robot=True),  # PDB
+    2004: Entry("Number of extra, non-servoed, axes", "int", 1, _const(0), READ_ONLY, robot=True),  # robot01.pac
+    # The motion references (robot01.pac): per axis, 100 % speeds and accelerations (mm, deg).
+    2700: Entry("100% joint speeds", "num", 0, _per_axis(lambda kin: kin.max_velocity, 2), READ_ONLY, robot=True),
+    2701: Entry("100% Cartesian speeds", "num", 3, _cartesian_speed, READ_ONLY, robot=True),
+    2702: Entry("100% joint accels", "num", 0, _per_axis(lambda kin: kin.max_acceleration, 3), READ_ONLY, robot=True),
+    2703: Entry("100% Cartesian accels", "num", 3, _figures("cartesian_accel", [0.0, 0.0, 0.0]), READ_ONLY,
+                robot=True),
+    **{dataid: Entry(label, "num", 1, lambda rt, i=i: [_figures("max_percent", [100.0] * 3)(rt)[i]], READ_ONLY,
+                     robot=True)
+       for i, (dataid, label) in enumerate([(2704, "Max %speed allowed"), (2705, "Max %accel allowed"),
+                                            (2706, "Max %decel allowed")])},
     2800: Entry("Robot homed", "bool", 1, lambda rt: [robot_state(rt).homed], READ_ONLY, robot=True,
                 live=True),  # PyLabRobot DataIDs; the AD-SDL PF400 driver reads it
     16000: Entry("Robot serial number", "str", 1, _const("TWIN-0001"), robot=True),  # PDB
     16050: Entry("Kinematic dimensional constants", "num", 16, _link_lengths, READ_ONLY, robot=True),  # PDB
     16051: Entry("Tool set at restart", "num", 6, _mounted_tool, robot=True),  # PDB; the cell's gripper
     16052: Entry("Base set at restart", "num", 6, _const(*[0.0] * 6), robot=True),  # PDB
+    # The twin's joints stop at one range: its hard stops are its soft limits (a field PF400's are
+    # 1-2 units wider, calib01.pac).
+    16075: Entry("Joint maximum hard stop limits", "num", 0, _soft_limits(+1), READ_ONLY, robot=True),  # calib01.pac
+    16076: Entry("Joint minimum hard stop limits", "num", 0, _soft_limits(-1), READ_ONLY, robot=True),  # calib01.pac
     16077: Entry("Joint maximum soft stop limits", "num", 0, _soft_limits(+1), READ_ONLY, robot=True),  # Dictionary
     16078: Entry("Joint minimum soft stop limits", "num", 0, _soft_limits(-1), READ_ONLY, robot=True),  # Dictionary
 }
