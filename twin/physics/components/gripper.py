@@ -119,6 +119,8 @@ class WeldGripper(Component):
         m.eq_data[eq, 6:10] = relq
         m.eq_data[eq, 10] = 1.0  # torquescale
         d.eq_active[eq] = 1
+        self._hold_jaws(i)
+        self.parts.hold(i, True)
         self.held = i
         self._held_since = self.time
         self._carry(i)
@@ -169,6 +171,12 @@ class WeldGripper(Component):
         forces[pairs[gripping, 1] != g] *= -1.0
         return float(np.linalg.norm(weld + forces.sum(axis=0)))
 
+    def _hold_jaws(self, i: int) -> None:
+        """Keep the jaws where they touch part i once its contacts are off (fingers only)."""
+
+    def _free_jaws(self) -> None:
+        """After a slip: the hand's command back on the jaws."""
+
     def _check_slip(self) -> None:
         i = self.held
         if self.time >= self._carried_at + CARRY_UPDATE_S:  # the arm's posture changed
@@ -184,6 +192,9 @@ class WeldGripper(Component):
         d = self.data
         d.eq_active[self._eq[i]] = 0
         self.held = None
+        self.parts.hold(i, False)
+        if not commanded:  # a slip: the jaws are still commanded closed (opening set their command)
+            self._free_jaws()
         self._robot.carry(None)
         self.parts.wake_body(i)  # a part let go at rest must not sleep in mid-air
         self._released = (i, float(d.time))
@@ -219,6 +230,8 @@ class FingerGripper(WeldGripper):
                                      model.actuator(f"{gp}finger_right_act").id])
         self._close_ctrl = model.actuator_ctrlrange[self._finger_act, 1].copy()
         self._pads = (model.geom(f"{gp}pad_left").id, model.geom(f"{gp}pad_right").id)
+        self._jaw_qadr = model.jnt_qposadr[model.actuator_trnid[self._finger_act, 0]]
+        self._jaw_hold = np.zeros(2)  # jaw positions at the held part's faces (m)
         self.pad_mu = float(max(model.geom_friction[self._pads[0], 0], model.geom_friction[self._pads[1], 0]))
         jaw_body = np.array([model.body(b).name.startswith(f"{gp}finger") for b in range(model.nbody)])
         self._gripping_geom = jaw_body[model.geom_bodyid]
@@ -242,14 +255,44 @@ class FingerGripper(WeldGripper):
         self.closed = closed
 
     def grip_force(self) -> float:
-        """Squeeze on a gripped part, N: the smaller of the two jaw actuator forces."""
+        """Squeeze on a gripped part, N: the smaller of the two jaw actuator forces; while a
+        part is held, the force each closed jaw's servo pushes with at the part's face
+        (its gain times the command's lead on that face, within its force range)."""
         left, right = self._finger_act.tolist()  # two floats: plain Python beats numpy's reductions
-        force = self.data.actuator_force
-        return min(abs(float(force[left])), abs(float(force[right])))
+        if self.held is None:
+            force = self.data.actuator_force
+            return min(abs(float(force[left])), abs(float(force[right])))
+        m, pushes = self.model, []
+        for jaw, act in enumerate((left, right)):
+            f = float(m.actuator_gainprm[act, 0] * (self._close_ctrl[jaw] - self._jaw_hold[jaw]))
+            if m.actuator_forcelimited[act]:
+                f = min(max(f, float(m.actuator_forcerange[act, 0])), float(m.actuator_forcerange[act, 1]))
+            pushes.append(abs(f))
+        return min(pushes)
 
     def capacity(self, i: int) -> float:
         mu = max(self.pad_mu, float(self.model.geom_friction[self.parts.geom[i], 0]))
         return 2.0 * mu * self.grip_force()
+
+    def _hold_jaws(self, i: int) -> None:
+        """Each jaw's servo holds it where its pad's face meets part i (the jaw's position
+        less the pad's penetration); `grip_force` is then what the closed jaw pushes with
+        there."""
+        d = self.data
+        g = int(self.parts.geom[i])
+        ncon = d.ncon
+        contact = d.contact  # each attribute read copies MuJoCo's arrays: read them once
+        pairs, dist = contact.geom[:ncon], contact.dist[:ncon]
+        for jaw, pad in enumerate(self._pads):
+            q = float(d.qpos[self._jaw_qadr[jaw]])
+            ks = np.flatnonzero(((pairs[:, 0] == pad) & (pairs[:, 1] == g)) | ((pairs[:, 1] == pad) & (pairs[:, 0] == g)))
+            if len(ks):
+                q += min(float(dist[ks].min()), 0.0)
+            self._jaw_hold[jaw] = q
+        d.ctrl[self._finger_act] = self._jaw_hold
+
+    def _free_jaws(self) -> None:
+        self.data.ctrl[self._finger_act] = self._close_ctrl if self.closed else 0.0  # the jaws close on
 
     def check(self, t: float) -> None:
         if self.config.holding_input is not None:

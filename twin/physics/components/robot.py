@@ -19,7 +19,7 @@ import numpy as np
 from ...controller.kinematics import RobotKinematics
 from ..geometry import matrix_to_quat, vplus_to_matrix
 from ..scene import load_model, resolve
-from .base import CellContext, Component
+from .base import ROBOT_CONAFFINITY, ROBOT_CONTYPE, CellContext, Component
 
 
 class Robot(Component):
@@ -74,12 +74,25 @@ class Robot(Component):
         root = m.body(self.root_name).id
         robot_body = np.array([self._descends_from(b, root) and m.body_weldid[b] != 0 for b in range(m.nbody)])
         self.robot_geom = robot_body[m.geom_bodyid]  # moving robot geoms, gripper included
+        self._robot_contact_bits(robot_body)
         self._touching: set[tuple[int, int]] = set()
         self.collisions: list[dict] = []
         self._gripper = ctx.by_kind["gripper"]["gripper"]
         self.kinematics = RobotKinematics.from_mjcf(self.model_path)
         self.payload_torque = np.zeros(len(self.dadr))  # set by the gripper while it holds a part
         self._jacp = np.zeros((3, m.nv))
+
+    def _robot_contact_bits(self, robot_body: np.ndarray) -> None:
+        """The moving robot's colliding geoms get the robot's contact bits (base.py), so that
+        the part a grasp holds can stop touching it; the body-level masks follow."""
+        m = self.model
+        colliding = self.robot_geom & ((m.geom_contype != 0) | (m.geom_conaffinity != 0))
+        m.geom_contype[colliding] = ROBOT_CONTYPE
+        m.geom_conaffinity[colliding] = ROBOT_CONAFFINITY
+        for b in np.flatnonzero(robot_body).tolist():
+            geoms = m.geom_bodyid == b
+            m.body_contype[b] = np.bitwise_or.reduce(m.geom_contype[geoms], initial=0)
+            m.body_conaffinity[b] = np.bitwise_or.reduce(m.geom_conaffinity[geoms], initial=0)
 
     def home(self, location: list[float]) -> None:
         """Put the robot at the IK of `location` (RIGHTY), held there by its servos."""
