@@ -166,6 +166,11 @@ class Cell:
         that the planned acceleration needs, as a servo with inertia feed-forward does."""
         self.robot.set_servo(q, qd, qdd)
 
+    def servo_feed(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray):
+        """Servo references for several steps (one row each): the function `step` takes as
+        its `feed` (`Robot.servo_feed`)."""
+        return self.robot.servo_feed(q, qd, qdd)
+
     def set_gripper(self, closed: bool) -> None:
         """The hand: fingers closed/open, or a suction cup's vacuum on/off. Letting go
         releases any held part at once."""
@@ -203,13 +208,22 @@ class Cell:
             self.parts.mark_missed(body, cause)
 
     # ------------------------------------------------------------------ stepping
-    def step(self, n: int = 1) -> None:
+    def step(self, n: int = 1, feed=None) -> None:
         """Advance physics by n steps; the components' checks run every check interval
-        (every step while one is busy)."""
+        (every step while one is busy).  `feed(j)`, when given, is called before the j-th
+        (0-based) of the n steps: the servo references of that step (`servo_feed`);
+        without it MuJoCo runs the steps between two checks in one call."""
         m, d = self.model, self.data
+        j = 0
         while n > 0:
             k = min(n, self._steps_to_check)
-            mujoco.mj_step(m, d, k)
+            if feed is None:
+                mujoco.mj_step(m, d, k)
+            else:
+                for row in range(j, j + k):
+                    feed(row)
+                    mujoco.mj_step(m, d)
+                j += k
             n -= k
             self._steps_to_check -= k
             if self._steps_to_check <= 0:

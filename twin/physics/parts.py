@@ -41,9 +41,11 @@ RETIRED_DAMPING = (1e5, 100.0)  # N s/m and N m s/rad on a retired part's free j
 # a step, a 2000-body pool made the demo 2.8x slower), and so does a bigger heap of
 # retired parts under the landing ones (a 200-body heap: +60 % a part). No more are ever
 # in play at once; beyond it the bodies are recycled (see `take`), each part's report
-# entry frozen where it came to rest, so the report still gives every part's final pose.
-# The demo's pool: measured flat over 1000 parts (bench/long_run.py).
-MAX_RECYCLED_BODIES = 120
+# entry frozen where it came to rest, so the report still gives every part's final pose
+# (a bin shows the last of them). The demo asks for 120: with 24 its physics step costs
+# a third less (measured 36 -> 24 us a step, docs/performance.md), and it never has more
+# than 6 parts in play (nest, hand, belt, falling).
+MAX_RECYCLED_BODIES = 24
 
 
 class PartPool(Component):

@@ -4,9 +4,9 @@ Both hold a part with a weld that engages only from real contact (MuJoCo's conta
 rotating links drift, so friction or adhesion alone lets a carried part creep: see
 /work/shared/notes/modelling-notes.md): one inactive weld per pooled part (gripper body ->
 part) is declared; on engagement the current relative pose is written into it and it is
-activated; it is released when the gripper lets go, or when the net force the gripper
-applies to the part (weld plus every robot contact with the part) exceeds what the grip
-can carry; then the part is lost (a "slip" event, the part dropped) and falls.
+activated; it is released when the gripper lets go, or when the force the gripper applies
+to the part (the weld's) exceeds what the grip can carry; then the part is lost (a "slip"
+event, the part dropped) and falls.
 
 * Fingers (`FingerGripper`): engage when the jaws are commanded closed and BOTH pads touch
   the same part; capacity 2 * mu * grip force.
@@ -82,7 +82,6 @@ class WeldGripper(Component):
         self._tcp = model.site(f"{self.prefix}tcp").id
         self._eq = np.array([model.equality(f"grasp_{i}").id for i in range(ctx.parts.size)], dtype=int)
         robot: Robot = ctx.by_kind["robot"]["robot"]
-        self._robot_geom = robot.robot_geom
         self._robot = robot
 
     @property
@@ -143,39 +142,23 @@ class WeldGripper(Component):
                            max_payload_kg=payload[-1])
 
     def load(self, i: int) -> float:
-        """Norm of the net force the gripper applies to part i, N: its weld plus every contact
-        of a robot geom with the part.  The weld and the squeezing pads (or the cup pressing
-        down) push against each other; only their sum is what the grip must carry (the part's
-        weight and inertia, and whatever presses the part against the cell)."""
-        m, d = self.model, self.data
+        """Norm of the net force the gripper applies to part i, N: the force of its weld (the
+        held part does not touch the robot, see the module docstring), what the grip must
+        carry: the part's weight and inertia, and whatever presses it against the cell."""
+        d = self.data
         eq = self._eq[i]
-        nefc = d.nefc
+        head = min(d.nefc, 12)
         # Equality rows come first in the constraint list; only one weld is ever active.
-        rows = np.flatnonzero((d.efc_type[:min(nefc, 12)] == EQUALITY_ROW)
-                              & (d.efc_id[:min(nefc, 12)] == eq))
+        rows = np.flatnonzero((d.efc_type[:head] == EQUALITY_ROW) & (d.efc_id[:head] == eq))
         if len(rows) < 3:
             return 0.0
-        weld = -d.efc_force[rows[:3]]  # the weld pulls body2 (the part) against its error
-        g = self.parts.geom[i]
-        contact = d.contact  # each attribute read copies MuJoCo's arrays: read them once
-        pairs = contact.geom[:d.ncon]
-        robot = self._robot_geom[pairs]
-        gripping = np.flatnonzero(((pairs[:, 0] == g) & robot[:, 1]) | ((pairs[:, 1] == g) & robot[:, 0]))
-        if not len(gripping):
-            return float(np.linalg.norm(weld))
-        local = np.zeros((len(gripping), 6))
-        for row, k in zip(local, gripping.tolist()):
-            mujoco.mj_contactForce(m, d, k, row)
-        frames = contact.frame[gripping].reshape(-1, 3, 3)
-        forces = np.einsum("kji,kj->ki", frames, local[:, :3])  # on geom2, world axes
-        forces[pairs[gripping, 1] != g] *= -1.0
-        return float(np.linalg.norm(weld + forces.sum(axis=0)))
+        return float(np.linalg.norm(d.efc_force[rows[:3]]))
 
     def _hold_jaws(self, i: int) -> None:
-        """Keep the jaws where they touch part i once its contacts are off (fingers only)."""
+        """Keep the jaws on part i once its contacts are off (a finger gripper's)."""
 
     def _free_jaws(self) -> None:
-        """After a slip: the hand's command back on the jaws."""
+        """After a slip: the hand's command back on the jaws (a finger gripper's)."""
 
     def _check_slip(self) -> None:
         i = self.held

@@ -13,6 +13,8 @@ which stops the robot and the program (`take_collisions`).
 
 from __future__ import annotations
 
+from typing import Callable
+
 import mujoco
 import numpy as np
 
@@ -71,6 +73,9 @@ class Robot(Component):
         # (they are in the robot files): a slice assignment costs a third of an index array's.
         self._ctrl_pos, self._ctrl_vel, self._dofs = (_as_slice(self.act_pos), _as_slice(self.act_vel),
                                                       _as_slice(self.dadr))
+        both = _as_slice(np.concatenate([self.act_pos, self.act_vel]))
+        self._ctrl_both = both if isinstance(both, slice) else None
+        self._feed_torque = np.zeros((0, len(self.dadr)))  # torque rows of the last `servo_feed`
         root = m.body(self.root_name).id
         robot_body = np.array([self._descends_from(b, root) and m.body_weldid[b] != 0 for b in range(m.nbody)])
         self.robot_geom = robot_body[m.geom_bodyid]  # moving robot geoms, gripper included
@@ -81,6 +86,7 @@ class Robot(Component):
         self.kinematics = RobotKinematics.from_mjcf(self.model_path)
         self.payload_torque = np.zeros(len(self.dadr))  # set by the gripper while it holds a part
         self._jacp = np.zeros((3, m.nv))
+        self._mass_gather = self._mass_block_index()
 
     def _robot_contact_bits(self, robot_body: np.ndarray) -> None:
         """The moving robot's colliding geoms get the robot's contact bits (base.py), so that
@@ -129,6 +135,48 @@ class Robot(Component):
         mujoco.mj_mulM(self.model, self.data, self._torque_full, self._qdd_full)
         applied[dofs] = self._torque_full[dofs] + self.payload_torque
 
+    def servo_feed(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> Callable[[int], None]:
+        """The references of several physics steps at once (rows of q, qd, qdd): the function
+        that sets row j's before step j, as `set_servo` does.  The inertia feed-forward is
+        M qdd with the arm's mass matrix at the first step (it changes by well under a
+        percent in the steps of one controller cycle)."""
+        mask, addresses = self._mass_gather
+        block = np.zeros(mask.shape)
+        block[mask] = self.data.M[addresses]
+        block += np.tril(block, -1).T  # MuJoCo stores the lower triangle
+        torque = self._feed_torque = qdd @ block.T + self.payload_torque  # `carry` keeps it current
+        ctrl, applied, dofs = self.data.ctrl, self.data.qfrc_applied, self._dofs
+        if self._ctrl_both is not None:  # positions and velocities side by side: one write a step
+            rows, both = np.concatenate([q, qd], axis=1), self._ctrl_both
+
+            def feed(j: int) -> None:
+                ctrl[both] = rows[j]
+                applied[dofs] = torque[j]
+            return feed
+        pos, vel = self._ctrl_pos, self._ctrl_vel
+
+        def feed(j: int) -> None:
+            ctrl[pos] = q[j]
+            ctrl[vel] = qd[j]
+            applied[dofs] = torque[j]
+        return feed
+
+    def _mass_block_index(self) -> tuple[np.ndarray, np.ndarray]:
+        """Where the arm's joint block of the mass matrix lies in MuJoCo's sparse `data.M`
+        (lower triangle, rows of `M_rowadr`/`M_colind`): a mask of the block's lower
+        triangle and the addresses of its entries, in the mask's order."""
+        m, dofs = self.model, self.dadr.tolist()
+        mask, addresses = np.zeros((len(dofs), len(dofs)), dtype=bool), []
+        for a, dof in enumerate(dofs):
+            start = int(m.M_rowadr[dof])
+            for adr in range(start, start + int(m.M_rownnz[dof])):
+                col = int(m.M_colind[adr])
+                if col in dofs and dofs.index(col) <= a:
+                    mask[a, dofs.index(col)] = True
+                    addresses.append((a, dofs.index(col), adr))
+        addresses.sort()  # row-major: the order numpy's boolean mask assigns in
+        return mask, np.array([adr for _, _, adr in addresses], dtype=int)
+
     def carry(self, part_body: int | None, holder_body: int = -1) -> None:
         """The drives take the weight of a held part (None: nothing held), as the servos'
         integral action does: the joint torques that hold its weight where it hangs on the
@@ -139,7 +187,9 @@ class Robot(Component):
             m, d = self.model, self.data
             mujoco.mj_jac(m, d, self._jacp, None, d.xipos[part_body], holder_body)
             torque = self._jacp[:, self.dadr].T @ (-m.body_mass[part_body] * m.opt.gravity)
-        self.data.qfrc_applied[self.dadr] += torque - self.payload_torque
+        change = torque - self.payload_torque
+        self.data.qfrc_applied[self.dadr] += change
+        self._feed_torque += change  # the steps still to be fed carry it too
         self.payload_torque = torque
 
     # ------------------------------------------------------------------ collisions
