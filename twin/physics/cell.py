@@ -138,7 +138,9 @@ class Cell:
         self._check_steps = max(1, round(self.config.physics.check_interval / self.timestep))
         self._steps_to_check = 1
         # Check order: the gripper first (grasps), the scene's components, collisions, parts.
-        self._checked = [self.gripper, *self.components[2:], self.robot, self.parts]
+        # Components without a check of their own (a table, a bin) are not called.
+        self._checked = [c for c in (self.gripper, *self.components[2:], self.robot, self.parts)
+                         if type(c).check is not Component.check]
         self._busy = [c for c in self._checked if type(c).busy is not Component.busy]
         self.robot.home(self.config.locations[self.config.robot.home])
         mujoco.mj_forward(m, d)

@@ -140,10 +140,9 @@ class Robot(Component):
         that sets row j's before step j, as `set_servo` does.  The inertia feed-forward is
         M qdd with the arm's mass matrix at the first step (it changes by well under a
         percent in the steps of one controller cycle)."""
-        mask, addresses = self._mass_gather
-        block = np.zeros(mask.shape)
-        block[mask] = self.data.M[addresses]
-        block += np.tril(block, -1).T  # MuJoCo stores the lower triangle
+        rows, cols, addresses = self._mass_gather
+        block = np.zeros((len(self.dadr), len(self.dadr)))
+        block[rows, cols] = block[cols, rows] = self.data.M[addresses]  # MuJoCo stores the lower triangle
         torque = self._feed_torque = qdd @ block.T + self.payload_torque  # `carry` keeps it current
         ctrl, applied, dofs = self.data.ctrl, self.data.qfrc_applied, self._dofs
         if self._ctrl_both is not None:  # positions and velocities side by side: one write a step
@@ -161,21 +160,19 @@ class Robot(Component):
             applied[dofs] = torque[j]
         return feed
 
-    def _mass_block_index(self) -> tuple[np.ndarray, np.ndarray]:
+    def _mass_block_index(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Where the arm's joint block of the mass matrix lies in MuJoCo's sparse `data.M`
-        (lower triangle, rows of `M_rowadr`/`M_colind`): a mask of the block's lower
-        triangle and the addresses of its entries, in the mask's order."""
+        (its lower triangle, by rows: `M_rowadr`, `M_rownnz`, `M_colind`): the block's row
+        and column of each entry, and the entry's address."""
         m, dofs = self.model, self.dadr.tolist()
-        mask, addresses = np.zeros((len(dofs), len(dofs)), dtype=bool), []
+        entries = []
         for a, dof in enumerate(dofs):
             start = int(m.M_rowadr[dof])
             for adr in range(start, start + int(m.M_rownnz[dof])):
                 col = int(m.M_colind[adr])
-                if col in dofs and dofs.index(col) <= a:
-                    mask[a, dofs.index(col)] = True
-                    addresses.append((a, dofs.index(col), adr))
-        addresses.sort()  # row-major: the order numpy's boolean mask assigns in
-        return mask, np.array([adr for _, _, adr in addresses], dtype=int)
+                if col in dofs:
+                    entries.append((a, dofs.index(col), adr))
+        return tuple(np.array(column, dtype=int) for column in zip(*entries))
 
     def carry(self, part_body: int | None, holder_body: int = -1) -> None:
         """The drives take the weight of a held part (None: nothing held), as the servos'
@@ -195,23 +192,10 @@ class Robot(Component):
     # ------------------------------------------------------------------ collisions
     def check(self, t: float) -> None:
         """Record each new robot contact that is a collision (see the module docstring)."""
-        d = self.data
-        ncon = d.ncon
-        touching: set[tuple[int, int]] = set()
-        parts, gripper = self.ctx.parts, self._gripper
-        if ncon:
-            contact = d.contact  # each attribute read copies MuJoCo's arrays: read them once
-            g = contact.geom[:ncon]
-            robot = self.robot_geom[g]
-            mixed = (robot[:, 0] != robot[:, 1]) & (contact.dist[:ncon] < 0.0)
-            if mixed.any():
-                first_ours = robot[mixed, 0]
-                pairs = np.where(first_ours[:, None], g[mixed], g[mixed][:, ::-1])  # (ours, other)
-                # A box on a pad makes up to 4 contacts: each geom pair is judged once.
-                for ours, other in set(map(tuple, pairs.tolist())):
-                    if not gripper.contact_allowed(ours, int(parts.geom_part[other]), t):
-                        touching.add((ours, other))
-        m = self.model
+        touching = self._collisions_now(t)
+        if not touching and not self._touching:
+            return
+        m, d, parts = self.model, self.data, self.ctx.parts
         for ours, other in sorted(touching - self._touching):
             part = int(parts.geom_part[other])
             event = self.ctx.event("collision", **{
@@ -220,6 +204,26 @@ class Robot(Component):
                 "where": self.ctx.regions.region_of(d.geom_xpos[ours])})
             self.collisions.append(event)
         self._touching = touching
+
+    def _collisions_now(self, t: float) -> set[tuple[int, int]]:
+        """(robot geom, other geom) of each robot contact now that the gripper does not allow."""
+        d = self.data
+        ncon = d.ncon
+        if not ncon:
+            return set()
+        contact = d.contact  # each attribute read copies MuJoCo's arrays: read them once
+        g = contact.geom[:ncon]
+        robot = self.robot_geom[g]
+        if not robot.any():  # most contacts are the parts' with the cell
+            return set()
+        mixed = (robot[:, 0] != robot[:, 1]) & (contact.dist[:ncon] < 0.0)
+        if not mixed.any():
+            return set()
+        parts, gripper = self.ctx.parts, self._gripper
+        pairs = np.where(robot[mixed, 0][:, None], g[mixed], g[mixed][:, ::-1])  # (ours, other)
+        # A box on a pad makes up to 4 contacts: each geom pair is judged once.
+        return {(ours, other) for ours, other in set(map(tuple, pairs.tolist()))
+                if not gripper.contact_allowed(ours, int(parts.geom_part[other]), t)}
 
 
 def _as_slice(indices: np.ndarray) -> slice | np.ndarray:
