@@ -497,6 +497,34 @@ def test_brake_stops_the_robot_on_its_path():
     assert np.linalg.norm(sim.controller.destination().position() - here) < 0.05  # DEST: where it stopped
 
 
+def test_references_fed_in_chunks_are_those_of_step_by_step_feeding(monkeypatch):
+    """The run loop feeds a cycle's servo references in chunks (`servo_chunk`, computed with
+    numpy); they are the references `servo_step` gives one step at a time, blends, DELAY
+    and the hand's actions at motion starts included, and the robot ends where it did."""
+    from twin.controller.controller import VirtualController
+
+    text = _program("APPRO a, 50", "MOVES a", "CLOSEI", "DEPARTS 50", "APPRO b, 50", "MOVE b", "DELAY 0.1",
+                    "OPENI", "DEPART 50", "MOVE a", "BREAK")
+    runs = []
+    for stepwise in (False, True):
+        with monkeypatch.context() as patch:
+            references = _servo_references(patch)
+            if stepwise:
+                patch.setattr(VirtualController, "servo_chunk", lambda self, limit: (self.servo_step(), (1, None))[1])
+            sim, _, outcome, _ = run_on_cell(text, locations={"a": A, "b": B})
+        assert outcome.errors == []
+        runs.append((references, sim.cell.robot_qpos(), [m.start_s for m in sim.controller.history],
+                     [(e["t"], e["kind"]) for e in sim.cell.events]))
+    (chunked, q_chunked, starts_chunked, events_chunked), (stepped, q_stepped, starts_stepped, events_stepped) = runs
+    assert len(chunked) > 300
+    # Standing still a chunk gets one reference (DELAY) or none; moving, every step gets its own.
+    moving = [(t, qd) for t, qd, _ in stepped if np.any(qd)]
+    fed = {round(t, 6): qd for t, qd, _ in chunked}
+    assert len(moving) > 300 and all(np.array_equal(fed[round(t, 6)], qd) for t, qd in moving)
+    assert starts_chunked == starts_stepped and events_chunked == events_stepped
+    assert np.allclose(q_chunked, q_stepped, atol=1e-6)
+
+
 def test_blended_motions_stay_within_the_joint_speed_and_acceleration_limits(monkeypatch):
     """Continuous path rounds a corner only as much as the joint limits allow (V+ Operating
     System Reference, SPEED monitor command: the path is "rounded" near intermediate
