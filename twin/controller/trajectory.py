@@ -264,9 +264,14 @@ def _segment_clear_of_hole(kin: RobotKinematics, P0: np.ndarray, P1: np.ndarray,
     not cross that disc (its end points can both lie outside it)."""
     s = kin.scara
     elbow = s.elbow_joint
-    g = sorted(float(s.beta - s.alpha1 + s.s2 * lim) for lim in (kin.lower[elbow], kin.upper[elbow]))
-    g = [min(max(v, 0.0), math.pi) for v in g] if righty else [min(max(v, -math.pi), 0.0) for v in g]
-    fold = min(math.pi, max(abs(v) for v in g))
+    # The elbow angles the joint range allows in this configuration (a range may hold
+    # the folded arm, as the PF400's J3 does, 12 to 348 deg): the most folded one.
+    g = s.elbow(np.linspace(kin.lower[elbow], kin.upper[elbow], 721))
+    if np.any(np.abs(np.diff(g)) > math.pi):  # the wrapped angle jumps: the range passes the fold
+        fold = math.pi
+    else:
+        g = g[g >= 0.0] if righty else -g[g < 0.0]
+        fold = float(g.max()) if len(g) else 0.0
     r_min = math.sqrt(max(s.l1 ** 2 + s.l2 ** 2 + 2 * s.l1 * s.l2 * math.cos(fold), 0.0))
     a, b = P0[:2] - s.p1, P1[:2] - s.p1
     d = b - a
@@ -319,7 +324,7 @@ def plan_straight_move(kin: RobotKinematics, q0, T1, vmax, amax, cart_speed_max,
     R0 = T0[:3, :3].copy()
     length = float(np.linalg.norm(p1 - p0))
     rotvec = pin.log3(R0.T @ T1[:3, :3])
-    if kin.dof == 4:  # only the rotation about the vertical can be followed; a tilt is an error in ik
+    if kin.arm_dof == 4:  # only the rotation about the vertical can be followed; a tilt is an error in ik
         rotvec = np.array([0.0, 0.0, rotvec[2]]) if kin._tilt_ok(T1[:3, :3] @ untool[:3, :3]) else rotvec
     angle = float(np.linalg.norm(rotvec))
     # The end point first: an unreachable target is reported as such.
@@ -328,7 +333,9 @@ def plan_straight_move(kin: RobotKinematics, q0, T1, vmax, amax, cart_speed_max,
         return Trajectory.still(q0)
     if kin.scara is not None:
         s = kin.scara
-        _segment_clear_of_hole(kin, (T0 @ untool @ s.M4f_inv)[:3, 3], (T1 @ untool @ s.M4f_inv)[:3, 3], config)
+        rail = kin.rail_offset(q0)  # the line is the arm's, from where the rail holds it
+        _segment_clear_of_hole(kin, (T0 @ untool @ s.M4f_inv)[:3, 3] - rail, (T1 @ untool @ s.M4f_inv)[:3, 3] - rail,
+                               config)
 
     n = max(2, int(math.ceil(length / WAYPOINT_SPACING)), int(math.ceil(angle / WAYPOINT_ANGLE))) + 1
     for attempt in range(MAX_REFINEMENTS + 1):

@@ -42,7 +42,23 @@ def _const(*values) -> Callable[[Any], list]:
 
 
 def _axes(rt) -> int:
-    return rt.robot.kin.dof
+    from .state import axis_count  # noqa: PLC0415 - as _soft_limits
+    return axis_count(rt)
+
+
+def _axis_mask(rt) -> int:
+    """Bit n-1 for each axis n the robot has (a PF400 on a rail: axes 1-4 and 6)."""
+    return sum(1 << (axis - 1) for axis in rt.robot.kin.axis_numbers)
+
+
+def _link_lengths(rt) -> list:
+    """A SCARA's inner and outer link lengths (mm) in slots 2 and 3, as a PF400's controller
+    lists them (0, 302, 289, 0, ...: a field unit's calib01.pac); zeros for other robots."""
+    values = [0.0] * 16
+    scara = rt.robot.kin.scara
+    if scara is not None:
+        values[1], values[2] = round(scara.l1 * 1000.0, 6), round(scara.l2 * 1000.0, 6)
+    return values
 
 
 def _soft_limits(which: int) -> Callable[[Any], list]:
@@ -50,7 +66,8 @@ def _soft_limits(which: int) -> Callable[[Any], list]:
     def limits(rt) -> list:
         from .state import to_gpl_angles  # noqa: PLC0415 - state imports numpy arrays of the model
         kin = rt.robot.kin
-        return to_gpl_angles(rt, kin.upper if which > 0 else kin.lower)
+        # Rounded to a micro-unit: the model stores radians, the database degrees.
+        return [round(v, 6) for v in to_gpl_angles(rt, kin.upper if which > 0 else kin.lower)]
     return limits
 
 
@@ -81,11 +98,13 @@ TABLE: dict[int, Entry] = {
     1892: Entry("GPL program NVRAM variable array", "int", 8, _const(*[0] * 8)),  # manual L3034
     2000: Entry("Number of axes", "int", 1, lambda rt: [_axes(rt)], READ_ONLY, robot=True),  # PDB
     2002: Entry("Robot Name", "str", 1, _const("Robot 1"), robot=True),  # PDB
-    2003: Entry("Axis Mask", "int", 1, lambda rt: [(1 << _axes(rt)) - 1], READ_ONLY, robot=True),  # PDB
+    2003: Entry("Axis Mask", "int", 1, lambda rt: [_axis_mask(rt)], READ_ONLY, robot=True),  # PDB
     16000: Entry("Robot serial number", "str", 1, _const("TWIN-0001"), robot=True),  # PDB
+    16050: Entry("Kinematic dimensional constants", "num", 16, _link_lengths, READ_ONLY, robot=True),  # PDB
     16051: Entry("Tool set at restart", "num", 6, _mounted_tool, robot=True),  # PDB; the cell's gripper
     16052: Entry("Base set at restart", "num", 6, _const(*[0.0] * 6), robot=True),  # PDB
     16077: Entry("Joint maximum soft stop limits", "num", 0, _soft_limits(+1), READ_ONLY, robot=True),  # Dictionary
+    16078: Entry("Joint minimum soft stop limits", "num", 0, _soft_limits(-1), READ_ONLY, robot=True),  # Dictionary
 }
 
 _CONVERT = {"num": number, "int": integer, "bool": lambda v: number(v) != 0, "str": text}
