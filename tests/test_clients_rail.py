@@ -10,6 +10,7 @@ from __future__ import annotations
 import asyncio
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,10 +21,11 @@ from pylabrobot.arms.precise_flex.pf_400 import PreciseFlex400Backend
 from pylabrobot.arms.precise_flex.precise_flex_backend import PreciseFlexError
 from pylabrobot.resources import Coordinate, Rotation
 
-from clients_helpers import serving
+from clients_helpers import Tcs, numbers, serving
 from twin.controller.kinematics import KinematicsError, LinearRail, RobotKinematics
 from twin.controller.trajectory import plan_straight_move
 from twin.physics.geometry import vplus_to_matrix
+from twin.runner import run_program
 
 PORT = 10100
 SCENE = "scenes/pf400_rail.toml"
@@ -142,3 +144,38 @@ def test_pylabrobot_moves_the_rail_to_pick_and_place_across_the_bench(tmp_path):
     x, y, z = plate["pose"][:3]
     assert math.hypot(x - 350.0, y - 700.0) < 2.0  # mm: on the far nest, 1.4 m from where it was
     assert z == pytest.approx(770.0 + 14.35 / 2, abs=0.5)
+
+
+def test_a_gpl_program_sees_the_rail_as_axis_6_and_cartesian_positions_include_it():
+    result = run_program(Path(__file__).parent / "data" / "gpl" / "pf400_rail", scene=SCENE)
+    assert result.report.errors == []
+    assert result.report.output.splitlines() == [
+        "axes 6",
+        "rail -400 y -400",  # the rail alone: the flange rides along
+        "rail -400 y -600",  # a Cartesian move: the arm reaches, the rail stays
+        "rail 250 y 50",  # an Angles location with Angle(6): the rail moves with the arm
+    ]
+
+
+def test_the_commands_of_a_field_pf400_driver_on_a_rail():
+    """The command sequence of a public field driver for a PF400 on a rail (the AD-SDL
+    pf400 driver: it reads `sysState` 21 as ready, `pd 2800` as homed, `state` as a
+    number, `wherej` as six axes) and its neutral pose, J3 folded at 177 deg and J4 at
+    537 deg, which the PF400's ranges (12 .. 348, +/-960 deg) hold."""
+    with serving(["programs/gpl/tcs", "--scene", SCENE, "--fast"], [PORT]) as served:
+        tcs = Tcs(served.port(PORT))
+        assert tcs("mode 0") == "0"
+        assert tcs("sysState") == "0 7" and tcs("pd 2800") == "0 0"  # off; not homed
+        assert tcs("hp 1") == "0" and tcs("sysState") == "0 20"
+        assert tcs("attach 1") == "0" and tcs("sysState") == "0 21" and tcs("pd 234") == "0 21"
+        assert tcs("home") == "0" and tcs("pd 2800") == "0 1"
+        assert tcs("state") == "0 0"  # Robot.TrajState: no motion
+        assert tcs("Profile 1 50 50 50 50 0.1 0.1 10 0") == "0"
+        assert tcs("GripOpenPos 123") == "0" and tcs("GripClosePos 77") == "0"
+        neutral = [400.0, 1.4, 177.101, 537.107, 77.0, -150.0]
+        assert tcs("movej 1 " + " ".join(str(v) for v in neutral)) == "0"
+        assert numbers(tcs("wherej")) == pytest.approx(neutral, abs=0.01)
+        assert tcs("moveoneaxis 6 200 1") == "0" and numbers(tcs("wherej"))[5] == pytest.approx(200.0, abs=0.05)
+        assert tcs("attach 0") == "0" and tcs("sysState") == "0 20"
+        tcs.close()
+    assert served.returncode == 0, served.stderr

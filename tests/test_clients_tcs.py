@@ -8,32 +8,9 @@ import socket
 
 import pytest
 
-from clients_helpers import serving
+from clients_helpers import Tcs, numbers, serving
 
 PORT = 10100
-
-
-class Tcs:
-    def __init__(self, port: int):
-        self.sock = socket.create_connection(("127.0.0.1", port), timeout=60)
-        self.lines = self.sock.makefile("rb")
-
-    def __call__(self, command: str) -> str:
-        self.sock.sendall(command.encode() + b"\n")
-        line = self.lines.readline()
-        assert line.endswith(b"\r\n"), line
-        return line[:-2].decode()
-
-    def close(self) -> None:
-        self.sock.sendall(b"exit\n")
-        assert self.lines.readline() == b""  # exit: closed without a reply
-        self.sock.close()
-
-
-def numbers(reply: str) -> list[float]:
-    code, *data = reply.split()
-    assert code == "0", reply
-    return [float(v) for v in data]
 
 
 def test_the_command_set_over_a_raw_socket():

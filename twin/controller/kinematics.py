@@ -172,6 +172,26 @@ class _Scara:
         """Angle from link 1 to link 2 (world, seen from above)."""
         return _wrap(self.beta - self.alpha1 + self.s2 * np.asarray(q2))
 
+    def closed_form(self, T: np.ndarray, righty: bool) -> tuple[np.ndarray, ...]:
+        """Closed-form IK of flange poses T (n x 4 x 4) in the arm configuration `righty`:
+        shoulder, elbow and slide joints, the yaw psi of J4's frame from its home
+        orientation, and the elbow cosine c (|c| > 1: out of reach), each an n-array.  The
+        shoulder and elbow are on their principal turn (see `RobotKinematics._scara_branches`)."""
+        T4 = T @ self.M4f_inv
+        P = T4[:, :3, 3]
+        Rrel = T4[:, :3, :3] @ self.R4.T
+        psi = np.arctan2(Rrel[:, 1, 0], Rrel[:, 0, 0])
+        dx, dy = P[:, 0] - self.p1[0], P[:, 1] - self.p1[1]
+        c = (dx * dx + dy * dy - self.l1 ** 2 - self.l2 ** 2) / (2 * self.l1 * self.l2)
+        gamma = np.arccos(np.clip(c, -1.0, 1.0))
+        if not righty:
+            gamma = -gamma
+        theta1 = np.arctan2(dy, dx) - np.arctan2(self.l2 * np.sin(gamma), self.l1 + self.l2 * np.cos(gamma))
+        q1 = self.s1 * (theta1 - self.alpha1)
+        q2 = self.s2 * (gamma - (self.beta - self.alpha1))
+        q3 = (P[:, 2] - self.z4) / self.a3
+        return q1, q2, q3, psi, c
+
     @staticmethod
     def valid(model: pin.Model) -> bool:
         return model.nq == 4 and model.nv == 4 and _joint_kinds(model) in SCARA_LAYOUTS
@@ -357,33 +377,71 @@ class RobotKinematics:
         self.check_limits(q)
         return q
 
+    def ik_path(self, Ts: np.ndarray, q_seed: np.ndarray, righty: bool | None = None) -> np.ndarray:
+        """Joint vectors (n x dof) for the flange poses `Ts` (n x 4 x 4) of a continuous motion:
+        row i is `ik(Ts[i], row i - 1, righty, continuous=True)`, row -1 being `q_seed`.
+
+        For a SCARA the closed form runs on all the poses at once (numpy), each multi-turn
+        joint on the branch nearest the previous pose, and the result is checked with the
+        vectorised forward kinematics.  A pose that is out of reach, past a joint limit or
+        not landed on within `_refine`'s tolerance sends the whole path through `ik` one
+        pose at a time, which raises that pose's error as a single `ik` would."""
+        Ts = np.asarray(Ts, dtype=float)
+        q_seed = np.asarray(q_seed, dtype=float)
+        if self.scara is not None and len(Ts):
+            Q = self._scara_ik_path(Ts, q_seed, self.is_righty(q_seed) if righty is None else righty)
+            if Q is not None:
+                return Q
+        out = np.empty((len(Ts), self.dof))
+        q = q_seed
+        for i, T in enumerate(Ts):
+            q = out[i] = self.ik(T, q, righty=righty, continuous=True)
+        return out
+
+    def _scara_ik_path(self, Ts: np.ndarray, seed: np.ndarray, righty: bool) -> np.ndarray | None:
+        """`ik_path` for a SCARA; None when a pose needs `ik`'s own handling."""
+        s = self.scara
+        tilt_ok = Ts[:, 2, :3] @ self._home_rotation[2, :] >= math.cos(TILT_TOLERANCE)
+        arm = Ts.copy()
+        arm[:, :3, 3] -= self.rail_offset(seed)  # the arm reaches the poses from where the rail is
+        raw1, raw2, q3, psi, c = s.closed_form(arm, righty)
+        if not (np.all(tilt_ok) and np.all(np.abs(c) <= 1 + 1e-12)):
+            return None
+        Q = np.empty((len(Ts), self.dof))
+        Q[:, self.arm_dof:] = seed[self.arm_dof:]  # a rail stays where it is
+        Q[:, s.slide] = q3
+        q1, q4 = float(seed[s.shoulder]), float(seed[s.wrist])
+        for k, pose in enumerate(zip(raw1.tolist(), raw2.tolist(), psi.tolist())):
+            q1, q2, q4 = self._scara_branches(*pose, q1, q4, within=False)
+            Q[k, s.shoulder], Q[k, s.elbow_joint], Q[k, s.wrist] = q1, q2, q4
+        if np.any(Q < self.lower - LIMIT_EPS) or np.any(Q > self.upper + LIMIT_EPS):
+            return None
+        # The closed form is exact for a model `_Scara.valid` accepts (about 1e-15 m on the
+        # Cobra and the PF400); `_refine` would stop at once.  J4 is built from the yaw.
+        if not np.all(np.abs(self.fk_positions(Q) - Ts[:, :3, 3]) < 1e-10):
+            return None
+        return Q
+
+    def _scara_branches(self, q1, q2, psi, seed1, seed4, within: bool) -> tuple[float, float, float]:
+        """Shoulder, elbow and wrist of one closed-form solution: the shoulder and the wrist
+        on the turn nearest the seed's (within the limits with `within`), the elbow (not
+        multi-turn) nearest zero within its limits."""
+        s = self.scara
+        lo, hi = self.lower, self.upper
+        i1, i2, i4 = s.shoulder, s.elbow_joint, s.wrist
+        q1 = _branch_nearest(q1, seed1, lo[i1], hi[i1], within)
+        q2 = _branch_nearest(q2, 0.0, lo[i2], hi[i2], True)
+        q4 = _branch_nearest(s.s4 * (psi - s.s1 * q1 - s.s2 * q2), seed4, lo[i4], hi[i4], within)
+        return q1, q2, q4
+
     def _scara_ik(self, T, seed, righty: bool, continuous: bool) -> np.ndarray:
         s = self.scara
-        T4 = T @ s.M4f_inv
-        P = T4[:3, 3]
-        Rrel = T4[:3, :3] @ s.R4.T
-        psi = math.atan2(Rrel[1, 0], Rrel[0, 0])
-        dx, dy = P[0] - s.p1[0], P[1] - s.p1[1]
-        r2 = dx * dx + dy * dy
-        c = (r2 - s.l1 ** 2 - s.l2 ** 2) / (2 * s.l1 * s.l2)
+        q1, q2, q3, psi, c = (float(v[0]) for v in s.closed_form(T[None], righty))
         if c > 1 + 1e-12:
             raise KinematicsError.out_of_range("beyond the reach of the arm")
         if c < -1 - 1e-12:
             raise KinematicsError.out_of_range("too close to the J1 axis")
-        gamma = math.acos(min(1.0, max(-1.0, c)))
-        if not righty:
-            gamma = -gamma
-        theta1 = math.atan2(dy, dx) - math.atan2(s.l2 * math.sin(gamma), s.l1 + s.l2 * math.cos(gamma))
-        q1 = s.s1 * (theta1 - s.alpha1)
-        q2 = s.s2 * (gamma - (s.beta - s.alpha1))
-        q3 = (P[2] - s.z4) / s.a3
-        lo, hi = self.lower, self.upper
-        within = not continuous
-        i1, i2, i4 = s.shoulder, s.elbow_joint, s.wrist
-        q1 = _branch_nearest(q1, seed[i1], lo[i1], hi[i1], within)
-        q2 = _branch_nearest(q2, 0.0, lo[i2], hi[i2], True)  # the elbow angle is not multi-turn
-        q4 = s.s4 * (psi - s.s1 * q1 - s.s2 * q2)
-        q4 = _branch_nearest(q4, seed[i4], lo[i4], hi[i4], within)
+        q1, q2, q4 = self._scara_branches(q1, q2, psi, seed[s.shoulder], seed[s.wrist], within=not continuous)
         return s.joints(q1, q2, q3, q4)
 
     def _task_error(self, T: np.ndarray, M: pin.SE3) -> np.ndarray:

@@ -35,6 +35,7 @@ class Entry:
     default: Callable[[Any], list]  # rt -> the values at boot
     read_only: bool = False
     robot: bool = False  # a robot parameter (unit = robot number)
+    live: bool = False  # a state, read anew each time (not a setting kept from boot)
 
 
 def _const(*values) -> Callable[[Any], list]:
@@ -44,6 +45,11 @@ def _const(*values) -> Callable[[Any], list]:
 def _axes(rt) -> int:
     from .state import axis_count  # noqa: PLC0415 - as _soft_limits
     return axis_count(rt)
+
+
+def _power_state(rt) -> int:
+    from .robot import power_state  # noqa: PLC0415 - robot imports this module
+    return power_state(rt)
 
 
 def _axis_mask(rt) -> int:
@@ -96,9 +102,12 @@ TABLE: dict[int, Entry] = {
     601: Entry("Test speed", "num", 1, _const(10.0)),  # Dictionary ("test speed" is 601)
     **{i: Entry(f"GPL program variable {i - 1849}", "num", 1, _const(0.0)) for i in range(1850, 1870)},  # Dictionary
     1892: Entry("GPL program NVRAM variable array", "int", 8, _const(*[0] * 8)),  # manual L3034
+    234: Entry("Power state", "int", 1, lambda rt: [_power_state(rt)], READ_ONLY, live=True),  # PyLabRobot DataIDs
     2000: Entry("Number of axes", "int", 1, lambda rt: [_axes(rt)], READ_ONLY, robot=True),  # PDB
     2002: Entry("Robot Name", "str", 1, _const("Robot 1"), robot=True),  # PDB
     2003: Entry("Axis Mask", "int", 1, lambda rt: [_axis_mask(rt)], READ_ONLY, robot=True),  # PDB
+    2800: Entry("Robot homed", "bool", 1, lambda rt: [robot_state(rt).homed], READ_ONLY, robot=True,
+                live=True),  # PyLabRobot DataIDs; the AD-SDL PF400 driver reads it
     16000: Entry("Robot serial number", "str", 1, _const("TWIN-0001"), robot=True),  # PDB
     16050: Entry("Kinematic dimensional constants", "num", 16, _link_lengths, READ_ONLY, robot=True),  # PDB
     16051: Entry("Tool set at restart", "num", 6, _mounted_tool, robot=True),  # PDB; the cell's gripper
@@ -118,7 +127,7 @@ class Database:
 
     def of(self, rt, dataid: int) -> tuple[Entry, list]:
         entry = TABLE[dataid]
-        if dataid not in self.values:
+        if dataid not in self.values or entry.live:
             try:
                 self.values[dataid] = list(entry.default(rt))
             except AttributeError:  # a value taken from the robot model, in a run without a cell
