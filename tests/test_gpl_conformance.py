@@ -73,7 +73,79 @@ def test_pdb_errors_are_catchable_gpl_errors(tmp_path):
         End Try
 """)
     assert report.errors == []
-    assert report.output.splitlines() == ["-501", "-502", "-1000", "-706", "-708"]
+    # Brooks error list: -1501 Unknown Data ID code, -209 Read only, -1514 Invalid parameter
+    # array index (a robot number too large)
+    assert report.output.splitlines() == ["-1501", "-209", "-1514", "-706", "-708"]
+
+
+def test_pdb_robot_speed_homing_payload_and_gpl_variables(tmp_path):
+    """DataIDs and labels of a PreciseFlex's saved configuration (AD-SDL/pf400_module_ros
+    controller.pac, robot01.pac, calib01.pac, gpl_vars.pac, GPL 4.2J2): 2700 / 2702 the
+    100 % joint speeds and accelerations (the robot model's, deg/s and mm/s), 16077 / 16078
+    the joint soft limits, 2802 / 2803 / 2810 homing, 16071 the default %payload that
+    Robot.Payload starts from, 601 the test speed that Controller.SystemSpeed also sets,
+    1800-1849 GPL program Strings, 1890 a 25-value GPL variable array."""
+    report = on_cell(tmp_path, """
+        Console.WriteLine(Controller.PDb(2700))
+        Console.WriteLine(Controller.PDb(2702))
+        Console.WriteLine(Controller.PDb(16077) & " / " & Controller.PDb(16078))
+        Console.WriteLine(Controller.PDb(2802) & " " & Controller.PDb(2803) & " " & Controller.PDb(2810))
+        Controller.PDbNum(2803, 1, 1, 3) = -3
+        Console.WriteLine(Controller.PDb(2803))
+        Console.WriteLine(CStr(Robot.Payload))
+        Controller.PDbNum(16071) = 25
+        Console.WriteLine(CStr(Robot.Payload))
+        Robot.Payload = 60
+        Console.WriteLine(CStr(Robot.Payload) & " " & Controller.PDb(16071))
+        Controller.SystemSpeed = 40
+        Console.WriteLine(Controller.PDb(601))
+        Controller.PDbNum(601) = 20
+        Console.WriteLine(CStr(Controller.SystemSpeed))
+        Controller.PDb(1800) = "tray A"
+        Console.WriteLine(Controller.PDb(1800) & "|" & Controller.PDb(1849) & "|")
+        Controller.PDbNum(1890, 1, 1, 25) = 3.5
+        Console.WriteLine(CStr(Controller.PDbNum(1890, 1, 1, 25)) & " " & CStr(Controller.PDbNum(1891, 1, 1, 1)))
+""")
+    assert report.errors == []
+    lines = report.output.splitlines()
+    speeds = [float(v) for v in lines[0].split(",")]
+    accels = [float(v) for v in lines[1].split(",")]
+    assert len(speeds) == len(accels) == 4 and all(v > 0 for v in speeds + accels)
+    upper, lower = ([float(v) for v in side.split(",")] for side in lines[2].split(" / "))
+    assert len(upper) == len(lower) == 4 and all(lo < hi for lo, hi in zip(lower, upper))
+    assert lines[3:] == ["2 -9,-9,-9,-9 1,2,3,4,0,0,0,0,0,0,0,0", "-9,-9,-3,-9", "0", "25", "60 25",
+                         "40", "20", "tray A||", "3.5 0"]
+
+
+def test_pdb_index_and_value_errors(tmp_path):
+    """Brooks error list: -1509 Invalid data index (an array index beyond the array),
+    -707 Value out-of-range (a test speed or payload outside 0-100 percent)."""
+    report = on_cell(tmp_path, """
+        Dim ex As Exception
+        Try
+            Console.WriteLine(Controller.PDb(1890, 1, 1, 26))
+        Catch ex
+            Console.WriteLine(CStr(ex.ErrorCode))
+        End Try
+        Try
+            Controller.PDbNum(601) = 150
+        Catch ex
+            Console.WriteLine(CStr(ex.ErrorCode))
+        End Try
+        Try
+            Robot.Payload = -5
+        Catch ex
+            Console.WriteLine(CStr(ex.ErrorCode))
+        End Try
+        Try
+            Controller.PDbNum(16077, 1, 1, 1) = 10
+        Catch ex
+            Console.WriteLine(CStr(ex.ErrorCode))
+        End Try
+        Console.WriteLine(CStr(Controller.SystemSpeed))
+""")
+    assert report.errors == []
+    assert report.output.splitlines() == ["-1509", "-707", "-707", "-209", "50"]
 
 
 def test_restart_tool_and_base_come_from_the_database(tmp_path):

@@ -46,8 +46,8 @@ def case(name: str, source: str, code: int, line: int) -> None:
 for statement, code in [
     ('Thread.Sleep("abc")', -708), ("Thread.Sleep(Nothing)", -705), ("Thread.Sleep(New Location)", -706),
     ('Signal.DIO("a") = True', -708), ("Signal.DIO(Nothing) = True", -705), ('Signal.DIO(99999) = True', -3105),
-    ('Controller.PDb("x")', -708), ("Controller.PDb(9999)", -501), ("Controller.PDbNum(2002) = 3", -706),
-    ('Controller.PDbNum(2002)', -706), ('Controller.PDb(2002, 7)', -1000), ('Controller.SystemSpeed = "x"', -708),
+    ('Controller.PDb("x")', -708), ("Controller.PDb(9999)", -1501), ("Controller.PDbNum(2002) = 3", -706),
+    ('Controller.PDbNum(2002)', -706), ('Controller.PDb(2002, 7)', -1514), ('Controller.SystemSpeed = "x"', -708),
     ('Controller.SystemSpeed = 500', -706), ('Controller.SleepTick("x")', -708), ("Robot.Attached = 2", -1000),
     ('Robot.Attached = "one"', -708), ("Robot.Home", -1600), ("Move.Loc(Nothing, Nothing)", -705),
     ('Move.Loc("a", "b")', -706), ("Move.WaitForEOM(1, 2, 3)", -2005), ('Math.Sqrt("x")', -708),

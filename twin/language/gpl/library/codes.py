@@ -1,9 +1,10 @@
 """Error codes the GPL library raises, with their messages.
 
 The GPL User Manual gives only -153, -323, -799 and -801 (digest §7).  The
-codes marked "PreciseFlex" are the controller's as we remember its error list
-(not in the seeds, unverified); the ones marked "twin" are twin-defined, in the
-controller's style, most of them from -3100 down.  docs/gpl.md lists them all.
+codes marked "Brooks error list" are confirmed in the controller's published error
+code list (as transcribed in PyLabRobot, pylabrobot/arms/precise_flex/error_codes.py);
+"PreciseFlex" ones are the controller's as we remember it (unverified); "twin" ones are
+twin-defined, in the controller's style.  docs/gpl.md lists them all.
 """
 
 from __future__ import annotations
@@ -19,13 +20,16 @@ from . import shared
 DEVICE_FULL = (-323, "Device full")  # manual L2992
 XML_ERROR = (-799, "XML error")  # manual L3725
 NO_XML_NODE = (-801, "No XML node")  # manual L3731
-UNDEFINED_DATAID = (-501, "Undefined DataID")  # PreciseFlex (parameter database range), unverified
-READ_ONLY_DATAID = (-502, "DataID is read-only")  # PreciseFlex (parameter database range), unverified
-INVALID_ROBOT = (-1000, "Invalid robot number")  # PreciseFlex
-ROBOT_ALREADY_ATTACHED = (-1006, "Robot already attached")  # PreciseFlex
-NO_ROBOT_ATTACHED = (-1009, "No robot attached")  # PreciseFlex
-JOINT_OUT_OF_RANGE = (-1012, "Joint out-of-range")  # PreciseFlex
-NULLING_TIMEOUT = (-1014, "Time out during nulling")  # PreciseFlex
+UNKNOWN_DATAID = (-1501, "Unknown Data ID code")  # Brooks error list
+READ_ONLY_DATAID = (-209, "Read only")  # Brooks error list ("attempted to alter a value that can only be read")
+INVALID_DATA_INDEX = (-1509, "Invalid data index")  # Brooks error list (array index beyond the array)
+INVALID_PARAMETER_INDEX = (-1514, "Invalid parameter array index")  # Brooks error list (robot or unit number)
+VALUE_OUT_OF_RANGE = (-707, "Value out-of-range")  # Brooks error list
+INVALID_ROBOT = (-1000, "Invalid robot number")  # Brooks error list
+ROBOT_ALREADY_ATTACHED = (-1006, "Robot already attached")  # Brooks error list
+NO_ROBOT_ATTACHED = (-1009, "No robot attached")  # Brooks error list
+JOINT_OUT_OF_RANGE = (-1012, "Joint out-of-range")  # Brooks error list
+NULLING_TIMEOUT = (-1014, "Time out during nulling")  # Brooks error list
 POWER_OFF = (-1600, "Power not enabled")  # twin wording
 NOT_HOMED = (-1027, "Robot not homed")  # twin
 LOCATION_OUT_OF_RANGE = (-1025, "Location out of range")  # twin

@@ -6,11 +6,15 @@ Signatures (GPL Dictionary, Controller.PDb / Controller.PDbNum):
 array_index defaults to 0 for PDb (all the values, comma separated) and to 1 for
 PDbNum (the first value); key (protection override) is accepted and ignored.
 
-Only the DataIDs below exist in the twin; any other one is the controller's
-error for an undefined DataID.  Each entry says where its number comes from
-(the User Manual's lines, or the public Parameter Database reference).  The
-robot entries (2000-3999, 16000-17999) belong to robot `unit`: the twin has
-robot 1 only.  docs/gpl.md lists them.
+Only the DataIDs below exist in the twin; any other one is -1501 *Unknown Data ID
+code*, as on the controller.  Each entry says where its number and label come from:
+"manual Lnnn" (gpl-user-manual.txt), "PDB" (the public Parameter Database reference,
+www2.brooksautomation.com/Controller_Software/Software_Reference/PDB), "Dictionary"
+(the GPL Dictionary page of Controller.PDb) or ".pac" (the configuration files a
+PreciseFlex 400 running GPL 4.2J2 saved, public in github.com/AD-SDL/pf400_module_ros,
+resources/config_files/Configuration_Backups: controller.pac, robot01.pac, calib01.pac,
+gpl_vars.pac, which list each DataID with its label).  The robot entries (2000-3999,
+16000-17999) belong to robot `unit`: the twin has robot 1 only.  docs/gpl.md lists them.
 """
 
 from __future__ import annotations
@@ -22,7 +26,7 @@ import numpy as np
 
 from . import codes
 from .args import integer, number, text
-from .state import check_robot, robot_state
+from .state import robot_state
 
 READ_ONLY, READ_WRITE = True, False
 
@@ -31,10 +35,12 @@ READ_ONLY, READ_WRITE = True, False
 class Entry:
     label: str
     kind: str  # "num", "int", "bool" or "str"
-    count: int  # values in the array (1: a scalar)
     default: Callable[[Any], list]  # rt -> the values at boot
     read_only: bool = False
     robot: bool = False  # a robot parameter (unit = robot number)
+    # A value the controller itself holds (rt, values) -> None: writing the DataID sets it
+    # there too, and `default` reads it back, so both ways of setting it agree.
+    store: Callable[[Any, list], None] | None = None
 
 
 def _const(*values) -> Callable[[Any], list]:
@@ -45,13 +51,29 @@ def _axes(rt) -> int:
     return rt.robot.kin.dof
 
 
-def _soft_limits(which: int) -> Callable[[Any], list]:
-    """Joint soft limits in GPL units (degrees, mm) from the robot model."""
-    def limits(rt) -> list:
+def _per_axis(value) -> Callable[[Any], list]:
+    return lambda rt: [value] * _axes(rt)
+
+
+def _model(attribute: str) -> Callable[[Any], list]:
+    """A per-joint array of the robot model in GPL units (degrees, mm)."""
+    def values(rt) -> list:
         from .state import to_gpl_angles  # noqa: PLC0415 - state imports numpy arrays of the model
-        kin = rt.robot.kin
-        return to_gpl_angles(rt, kin.upper if which > 0 else kin.lower)
-    return limits
+        return [round(v, 3) for v in to_gpl_angles(rt, np.asarray(getattr(rt.robot.kin, attribute)))]
+    return values
+
+
+def _test_speed(rt) -> list:
+    return [float(rt.robot.settings.monitor_speed)]
+
+
+def _set_test_speed(rt, values: list) -> None:
+    """DataID 601 is what `Controller.SystemSpeed` sets (the Dictionary calls both the
+    system test speed): the controller's monitor speed."""
+    speed = float(values[0])
+    if not 0.0 < speed <= 100.0:
+        raise codes.fail(codes.VALUE_OUT_OF_RANGE, f"test speed {speed:g} (0 < percent <= 100)")
+    rt.robot.set_speed(speed, monitor=True)
 
 
 def _mounted_tool(rt) -> list:
@@ -65,27 +87,53 @@ def _mounted_tool(rt) -> list:
     return [float(v) for v in np.round(tcp, 3)] + [0.0, 0.0, 0.0]
 
 
-# DataID -> entry.  Sources: "manual Lnnn" (gpl-user-manual.txt), "PDB" (the public Parameter
-# Database reference, www2.brooksautomation.com/Controller_Software/Software_Reference/PDB),
-# "Dictionary" (the GPL Dictionary page of Controller.PDb).
+def _robot(label: str, kind: str, default, read_only: bool = False, store=None) -> Entry:
+    return Entry(label, kind, default, read_only, robot=True, store=store)
+
+
+# DataID -> entry (sources in the module docstring).
 TABLE: dict[int, Entry] = {
-    100: Entry("Controller manufacturer", "str", 1, _const("Brooks Automation"), READ_ONLY),  # PDB
-    101: Entry("Controller model", "str", 1, _const("twin"), READ_ONLY),  # PDB
-    103: Entry("Full software version", "str", 1, _const("GPL 4.2 (twin digital twin)"), READ_ONLY),  # PDB
-    104: Entry("Software version", "int", 1, _const(4), READ_ONLY),  # PDB
-    125: Entry("Serial console enable", "bool", 1, _const(True)),  # manual L2859
-    323: Entry("Error log file", "str", 1, _const("")),  # manual L3018
-    424: Entry("Vision server IP address", "str", 1, _const("127.0.0.1")),  # manual L3094
-    601: Entry("Test speed", "num", 1, _const(10.0)),  # Dictionary ("test speed" is 601)
-    **{i: Entry(f"GPL program variable {i - 1849}", "num", 1, _const(0.0)) for i in range(1850, 1870)},  # Dictionary
-    1892: Entry("GPL program NVRAM variable array", "int", 8, _const(*[0] * 8)),  # manual L3034
-    2000: Entry("Number of axes", "int", 1, lambda rt: [_axes(rt)], READ_ONLY, robot=True),  # PDB
-    2002: Entry("Robot Name", "str", 1, _const("Robot 1"), robot=True),  # PDB
-    2003: Entry("Axis Mask", "int", 1, lambda rt: [(1 << _axes(rt)) - 1], READ_ONLY, robot=True),  # PDB
-    16000: Entry("Robot serial number", "str", 1, _const("TWIN-0001"), robot=True),  # PDB
-    16051: Entry("Tool set at restart", "num", 6, _mounted_tool, robot=True),  # PDB; the cell's gripper
-    16052: Entry("Base set at restart", "num", 6, _const(*[0.0] * 6), robot=True),  # PDB
-    16077: Entry("Joint maximum soft stop limits", "num", 0, _soft_limits(+1), READ_ONLY, robot=True),  # Dictionary
+    # System identification and start-up
+    100: Entry("Controller manufacturer", "str", _const("Brooks Automation"), READ_ONLY),  # PDB
+    101: Entry("Controller model", "str", _const("twin"), READ_ONLY),  # PDB
+    103: Entry("Full software version", "str", _const("GPL 4.2 (twin digital twin)"), READ_ONLY),  # PDB
+    104: Entry("Software version", "int", _const(4), READ_ONLY),  # PDB
+    109: Entry("Controller name", "str", _const("twin")),  # .pac controller
+    125: Entry("Serial console enable", "bool", _const(True)),  # manual L2859, .pac controller
+    212: Entry("Auto home at startup", "bool", _const(False)),  # .pac controller; PDB homing setup
+    240: Entry("Automatic power on", "bool", _const(False)),  # .pac controller
+    262: Entry("Timeout waiting for power to come on in sec", "num", _const(1.0)),  # .pac controller
+    323: Entry("Error log file", "str", _const("")),  # manual L3018, .pac controller
+    424: Entry("Vision server IP address", "str", _const("127.0.0.1")),  # manual L3094
+    601: Entry("System wide test speed in %", "num", _test_speed, store=_set_test_speed),  # Dictionary, .pac
+    # GPL program variables (for web pages and host programs)
+    **{i: Entry("GPL program String", "str", _const("")) for i in range(1800, 1850)},  # .pac gpl_vars
+    **{i: Entry("GPL program variable", "num", _const(0.0)) for i in range(1850, 1870)},  # Dictionary, .pac
+    1890: Entry("GPL program variable array", "num", _const(*[0.0] * 25)),  # .pac gpl_vars
+    1891: Entry("GPL program variable array", "num", _const(*[0.0] * 25)),  # .pac gpl_vars
+    1892: Entry("GPL program NVRAM variable array", "int", _const(*[0] * 8)),  # manual L3034
+    # Robot configuration
+    2000: _robot("Number of axes", "int", lambda rt: [_axes(rt)], READ_ONLY),  # PDB
+    2002: _robot("Robot Name", "str", _const("Robot 1")),  # PDB
+    2003: _robot("Axis Mask", "int", lambda rt: [(1 << _axes(rt)) - 1], READ_ONLY),  # PDB
+    # Speeds and accelerations: the robot model's limits, which the planner uses
+    2700: _robot("100% joint speeds in (mm or deg)/sec", "num", _model("max_velocity"), READ_ONLY),  # .pac robot
+    2702: _robot("100% joint accels in (mm or deg)/sec^2", "num", _model("max_acceleration"),
+                 READ_ONLY),  # .pac robot
+    # Homing (stored: the twin's homing is instantaneous, its encoders absolute)
+    2801: _robot("Robot homed DOUT", "int", _const(0)),  # .pac robot
+    2802: _robot("Homing sequence", "int", _const(2)),  # .pac robot
+    2803: _robot("Homing method", "int", _per_axis(-9)),  # .pac robot
+    2810: _robot("Homing order", "int", lambda rt: list(range(1, _axes(rt) + 1)) + [0] * (12 - _axes(rt))),  # .pac
+    2813: _robot("Timeout on home axis, sec", "num", _const(0.0)),  # .pac robot
+    # Calibration
+    16000: _robot("Robot serial number", "str", _const("TWIN-0001")),  # PDB
+    16051: _robot("Tool set at restart", "num", _mounted_tool),  # PDB; the cell's gripper
+    16052: _robot("Base set at restart", "num", _const(*[0.0] * 6)),  # PDB
+    16066: _robot("Dynamic feedforward enable", "bool", _const(False)),  # .pac calib (the twin has no DFF)
+    16071: _robot("Dynamic feedforward default %payload", "num", _const(0.0)),  # .pac calib; Robot.Payload
+    16077: _robot("Joint max soft stop limit", "num", _model("upper"), READ_ONLY),  # Dictionary, .pac calib
+    16078: _robot("Joint min soft stop limit", "num", _model("lower"), READ_ONLY),  # .pac calib
 }
 
 _CONVERT = {"num": number, "int": integer, "bool": lambda v: number(v) != 0, "str": text}
@@ -99,7 +147,7 @@ class Database:
 
     def of(self, rt, dataid: int) -> tuple[Entry, list]:
         entry = TABLE[dataid]
-        if dataid not in self.values:
+        if entry.store is not None or dataid not in self.values:
             try:
                 self.values[dataid] = list(entry.default(rt))
             except AttributeError:  # a value taken from the robot model, in a run without a cell
@@ -114,23 +162,27 @@ def database(rt) -> Database:
     return state.pdb
 
 
+def value(rt, dataid: int, index: int = 1):
+    """One value of a DataID, for the library's own members (Robot.Payload, RestartTool)."""
+    return database(rt).of(rt, dataid)[1][index - 1]
+
+
 def _lookup(rt, dataid, unit, unit2) -> tuple[Entry, list]:
     dataid, unit, unit2 = integer(dataid), integer(unit), integer(unit2)
     entry = TABLE.get(dataid)
     if entry is None:
-        raise codes.fail(codes.UNDEFINED_DATAID, str(dataid))
-    if entry.robot:
-        check_robot(unit)
-    elif unit != 1:
-        raise codes.fail(codes.INVALID_ARGUMENT, f"DataID {dataid} has unit 1 only, not {unit}")
+        raise codes.fail(codes.UNKNOWN_DATAID, str(dataid))
+    if unit != 1:
+        what = "robot" if entry.robot else "unit"
+        raise codes.fail(codes.INVALID_PARAMETER_INDEX, f"DataID {dataid} ({entry.label}): {what} {unit}")
     if unit2 != 1:
-        raise codes.fail(codes.INVALID_ARGUMENT, f"DataID {dataid}: sub unit {unit2}")
+        raise codes.fail(codes.INVALID_PARAMETER_INDEX, f"DataID {dataid} ({entry.label}): sub unit {unit2}")
     return database(rt).of(rt, dataid)
 
 
 def _element(dataid: int, values: list, index: int) -> int:
     if not 1 <= index <= len(values):
-        raise codes.fail(codes.INVALID_ARGUMENT, f"DataID {dataid} has {len(values)} value(s), not index {index}")
+        raise codes.fail(codes.INVALID_DATA_INDEX, f"DataID {dataid} has {len(values)} value(s), not index {index}")
     return index - 1
 
 
@@ -160,17 +212,21 @@ def write(rt, dataid, unit, unit2, index, value, numeric: bool) -> None:
     entry, values = _lookup(rt, dataid, unit, unit2)
     dataid, index = integer(dataid), integer(index)
     if entry.read_only:
-        raise codes.fail(codes.READ_ONLY_DATAID, f"{dataid} ({entry.label})")
+        raise codes.fail(codes.READ_ONLY_DATAID, f"DataID {dataid} ({entry.label})")
     if numeric and entry.kind == "str":
         raise codes.fail(codes.INVALID_ARGUMENT, f"DataID {dataid} ({entry.label}) is not numeric")
     convert = _CONVERT[entry.kind]
+    new = list(values)
     if index == 0:  # PDb with every value: a comma separated list
-        items = text(value).split(",") if entry.count != 1 else [value]
+        items = text(value).split(",") if len(values) != 1 else [value]
         if len(items) != len(values):
             raise codes.fail(codes.INVALID_ARGUMENT, f"DataID {dataid} takes {len(values)} value(s)")
-        values[:] = [convert(v.strip() if isinstance(v, str) and entry.kind != "str" else v) for v in items]
-        return
-    values[_element(dataid, values, index)] = convert(value)
+        new = [convert(v.strip() if isinstance(v, str) and entry.kind != "str" else v) for v in items]
+    else:
+        new[_element(dataid, values, index)] = convert(value)
+    if entry.store is not None:
+        entry.store(rt, new)
+    values[:] = new
 
 
 def assign(rt, dataid, rest: tuple, numeric: bool) -> None:

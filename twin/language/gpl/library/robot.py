@@ -158,14 +158,20 @@ class Robot:
 
     @shared
     def Payload(rt, robot=1) -> float:
+        """The last payload set (percent of the maximum); at restart the controller's
+        "Dynamic feedforward default %payload" (DataID 16071)."""
         check_robot(robot)
-        return robot_state(rt).payload
+        payload = robot_state(rt).payload
+        return float(pdb.value(rt, 16071)) if payload is None else payload
 
     @shared
     def set_Payload(rt, value) -> None:
-        """Kept for reading back; the twin's servo model does not use it (the grasped part's
-        mass is simulated by MuJoCo)."""
-        robot_state(rt).payload = float(value)
+        """0 to 100 percent (console Set Payload); kept for reading back: the twin's servo
+        model does not use it (the grasped part's mass is simulated by MuJoCo)."""
+        percent = number(value)
+        if not 0.0 <= percent <= 100.0:
+            raise codes.fail(codes.VALUE_OUT_OF_RANGE, f"Payload {percent:g} (0 to 100 percent)")
+        robot_state(rt).payload = percent
 
     @shared
     def set_RapidDecel(rt, value) -> None:

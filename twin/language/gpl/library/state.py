@@ -38,7 +38,7 @@ class RobotState:
     selected: int = 1
     base: Location = NULL  # Robot.Base: robot base in the world (GPL "world" = robot frame + Base)
     tool: Location = NULL  # Robot.Tool: tool tip in the flange frame
-    payload: float = 0.0
+    payload: float | None = None  # Robot.Payload; None: not set since restart (DataID 16071)
     last_profile: Any = None
     last_in_range: float = 0.0
     source: Location | None = None
