@@ -681,3 +681,33 @@ Module M
 End Module
 """)
     assert out == "-710\n"
+
+
+# ------------------------------------------------------------ members of the manual's tables
+def test_source_angles_and_power_state_mode(tmp_path):
+    """Manual L2182 Robot.SourceAngles: the axes at the start of the previous motion
+    (Robot.DestAngles its end); L2131 Controller.PowerState, which the GPL Dictionary
+    writes Controller.PowerState(mode)."""
+    report = on_cell(tmp_path, """
+        Dim target As New Location
+        Dim start As Location
+        Dim p As New Profile
+        Console.WriteLine(CStr(Controller.PowerState(0)))
+        Controller.PowerEnabled = True
+        Robot.Attached = 1
+        Robot.Home
+        Console.WriteLine(CStr(Controller.PowerState(1)))
+        start = Robot.WhereAngles
+        target.Type = 1
+        target.Angles(start.Angle(1) + 20, start.Angle(2) - 15, start.Angle(3), start.Angle(4) + 30)
+        Move.Loc(target, p)
+        Move.WaitForEOM
+        Console.WriteLine(Format(Robot.SourceAngles.Angle(1) - start.Angle(1), "0.000"))
+        Console.WriteLine(Format(Robot.SourceAngles(1).Angle(4) - start.Angle(4), "0.000"))
+        Console.WriteLine(Format(Robot.DestAngles.Angle(1) - start.Angle(1), "0.000"))
+        Move.Loc(start, p)
+        Move.WaitForEOM
+        Console.WriteLine(Format(Robot.SourceAngles.Angle(2) - start.Angle(2), "0.000"))
+""")
+    assert report.errors == []
+    assert report.output.splitlines() == ["0", "20", "0.000", "0.000", "20.000", "-15.000"]

@@ -144,7 +144,7 @@ def _go(rt, flange: Location, profile: GplProfile, righty: bool | None, dest_q: 
     robot = rt.robot
     if state.last_in_range > 0:
         yield from _settle(rt)
-    source = robot.destination()
+    source, source_q = robot.destination(), np.array(destination_joints(rt))
     robot.set_speed(profile.Speed)  # this motion only
     if righty is not None and not profile.Straight:  # a straight line keeps the configuration
         robot.request_configuration(righty)
@@ -154,7 +154,7 @@ def _go(rt, flange: Location, profile: GplProfile, righty: bool | None, dest_q: 
         yield from robot.move(flange, straight=profile.Straight, cp=state.last_in_range < 0)
     except ProgramError as err:
         raise codes.from_controller(err) from None
-    state.source = source
+    state.source, state.source_q = source, source_q
     state.dest_q = dest_q
     state.last_profile = profile.Clone()
     state.last_in_range = profile.InRange

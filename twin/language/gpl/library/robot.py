@@ -115,6 +115,14 @@ class Robot:
         return GplLocation.cartesian(rt, state.base * source * state.tool)
 
     @shared
+    def SourceAngles(rt, robot=1) -> GplLocation:
+        """Angles at the start of the last motion (manual L2182); before any motion, the
+        present destination's."""
+        check_robot(robot)
+        source_q = robot_state(rt).source_q
+        return GplLocation.angles(rt, to_gpl_angles(rt, destination_joints(rt) if source_q is None else source_q))
+
+    @shared
     def SpeedAngles(rt, robot=1) -> GplLocation:
         """Instantaneous axis speeds (deg/s or mm/s) as an Angles location."""
         check_robot(robot)
@@ -228,7 +236,10 @@ class Controller:
             rt.robot.stop()
 
     @shared
-    def PowerState(rt) -> int:
+    def PowerState(rt, mode=0) -> int:
+        """The high power sequence state, 0 off, 20 on (twin codes); `mode` (GPL Dictionary,
+        Controller.PowerState(mode)) selects nothing else in the twin."""
+        number(mode)
         return POWER_STATE_ON if robot_state(rt).power else POWER_STATE_OFF
 
     @shared

@@ -42,6 +42,7 @@ class RobotState:
     last_profile: Any = None
     last_in_range: float = 0.0
     source: Location | None = None
+    source_q: np.ndarray | None = None  # joints at the start of the last motion
     dest_q: np.ndarray | None = None
     messages: list[str] = field(default_factory=list)  # Controller.SystemMessage log
     analog: dict[int, float] = field(default_factory=dict)  # Signal.AIO channels
