@@ -75,7 +75,7 @@ def test_pdb_errors_are_catchable_gpl_errors(tmp_path):
     assert report.errors == []
     # Brooks error list: -1501 Unknown Data ID code, -209 Read only, -1514 Invalid parameter
     # array index (a robot number too large)
-    assert report.output.splitlines() == ["-1501", "-209", "-1514", "-706", "-708"]
+    assert report.output.splitlines() == ["-1501", "-209", "-1514", "-202", "-717"]
 
 
 def test_pdb_robot_speed_homing_payload_and_gpl_variables(tmp_path):
@@ -399,7 +399,7 @@ End Module
 ])
 def test_integer_overflow_is_an_error_for_every_store(statement):
     """Integer is 32-bit (Table 4-1); a value out of its range stored in an Integer (a
-    variable, an array element, a field, a Function's result) is -703 *Numeric overflow*,
+    variable, an array element, a field, a Function's result) is -708 *Value infinite or NAN*,
     as Short and Byte are; the program's Try/Catch sees it."""
     out = output_of(f"""
 Class Counter
@@ -423,7 +423,7 @@ Module M
     End Sub
 End Module
 """)
-    assert out == "-703\n"
+    assert out == "-708\n"
 
 
 def test_integer_arithmetic_in_range_is_unchanged():
@@ -441,10 +441,12 @@ End Module
     assert out == "2147483647 6 2147483646 -2147483648\n"
 
 
-@pytest.mark.parametrize("expression", ["d * d", "d + d", "-d - d", "d / 1E-300", "d ^ 2", "CDbl(\"1E400\")"])
-def test_double_overflow_is_703_not_infinity(expression):
-    """Double overflow is -703 (docs/gpl.md error table, L1156), never INF: stored, shown
-    or converted."""
+@pytest.mark.parametrize("expression, code", [("d * d", -710), ("d + d", -710), ("-d - d", -710),
+                                              ("d / 1E-300", -710), ("d ^ 2", -710), ("CDbl(\"1E400\")", -708)])
+def test_double_overflow_is_an_error_not_infinity(expression, code):
+    """Double overflow is an error, never INF, stored, shown or converted (L1156): an
+    operation's result beyond the Double range is -710 *Arithmetic overflow*, a conversion
+    of a String beyond it -708 *Value infinite or NAN* (Brooks error code list)."""
     for use in (f"x = {expression}", f"Console.WriteLine({expression})", f"Console.WriteLine(CStr({expression}))"):
         out = output_of(f"""
 Module M
@@ -460,7 +462,7 @@ Module M
     End Sub
 End Module
 """)
-        assert out == "-703\n", use
+        assert out == f"{code}\n", use
 
 
 def test_not_on_a_number_is_logical():
@@ -608,7 +610,7 @@ def test_library_signatures_field_code_relies_on(tmp_path):
         Dim p As New Profile
         p.Speed2 = 0
         Console.WriteLine(CStr(p.Speed2))
-        Dim ex As New Exception(-1025)
+        Dim ex As New Exception(-1033)
         ex.UpdateErrorCode()
         ex.UpdateErrorCode
         Console.WriteLine(CStr(ex.ErrorCode))
@@ -619,7 +621,7 @@ def test_library_signatures_field_code_relies_on(tmp_path):
         Console.WriteLine(a.Type & " " & a.X & " " & a.Y)
 """)
     assert report.errors == []
-    assert report.output.splitlines() == ["1 20 40", "0", "-1025", "0", "0 300 10"]
+    assert report.output.splitlines() == ["1 20 40", "0", "-1033", "0", "0 300 10"]
 
 
 def test_pallet_order_uses_the_dictionarys_encoding():
@@ -653,10 +655,12 @@ End Module
     assert out.splitlines() == ["0", "0: 1", "1: 1", "2: 10", "3: 10", "4: 100", "5: 100"]
 
 
-def test_addressof_an_undefined_procedure_is_undefined_procedure():
-    """AddressOf (or a Delegate's New) of a procedure that does not exist is -710
-    *Undefined procedure*, the code a command server's dispatcher expects; a name given
-    as a String is found when the New runs, and the same code can be caught."""
+def test_an_undefined_procedure_in_addressof_or_a_delegate_or_a_thread():
+    """AddressOf a procedure that does not exist stops the load (Undefined symbol); a name
+    given as a String is found when the New runs: a Delegate's is -729 *Undefined symbol*,
+    a Thread's -744 *Invalid start procedure* ("The start procedure specified ... by a
+    Thread.Start method could not be found"), both from the Brooks error code list and
+    both catchable, as a command server's dispatcher needs."""
     for target in ("Missing", "M.Missing"):
         with pytest.raises(ProgramError) as caught:
             output_of(f"""
@@ -667,7 +671,7 @@ Module M
     End Sub
 End Module
 """)
-        assert caught.value.code == -710 and caught.value.line == 5
+        assert caught.value.code == -2002 and caught.value.line == 5
     out = output_of("""
 Delegate Sub Cmd()
 Module M
@@ -677,10 +681,16 @@ Module M
         Catch ex As Exception
             Console.WriteLine(CStr(ex.ErrorCode))
         End Try
+        Try
+            Dim t As New Thread("NoSuchProcedure")
+            t.Start()
+        Catch ex As Exception
+            Console.WriteLine(CStr(ex.ErrorCode))
+        End Try
     End Sub
 End Module
 """)
-    assert out == "-710\n"
+    assert out == "-729\n-744\n"
 
 
 # ------------------------------------------------------------ members of the manual's tables

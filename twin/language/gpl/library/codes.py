@@ -13,6 +13,7 @@ from ....controller.controller import BELT_JOINT_MOTION, BELT_WINDOW_VIOLATION
 from ....controller.controller import NULLING_TIMEOUT as VPLUS_NULLING_TIMEOUT
 from ....controller.kinematics import JOINT_LIMIT, LOCATION_OUT_OF_RANGE as VPLUS_OUT_OF_RANGE
 from ....controller.kinematics import STRAIGHT_LINE_CONFIG
+from .. import errors
 from ..errors import GplError
 from . import shared
 
@@ -30,26 +31,31 @@ ROBOT_ALREADY_ATTACHED = (-1006, "Robot already attached")  # Brooks error list
 NO_ROBOT_ATTACHED = (-1009, "No robot attached")  # Brooks error list
 JOINT_OUT_OF_RANGE = (-1012, "Joint out-of-range")  # Brooks error list
 NULLING_TIMEOUT = (-1014, "Time out during nulling")  # Brooks error list
-POWER_OFF = (-1600, "Power not enabled")  # twin wording
-NOT_HOMED = (-1027, "Robot not homed")  # twin
-LOCATION_OUT_OF_RANGE = (-1025, "Location out of range")  # twin
-STRAIGHT_CONFIG = (-1026, "Straight-line motion can't alter configuration")  # twin
-WRONG_LOCATION_TYPE = (-3100, "Invalid Location type for this member")  # twin
-NOTHING_ARGUMENT = (-705, "Object is Nothing")  # twin, the interpreter's code (gpl/errors.py)
-INVALID_ARGUMENT = (-706, "Invalid argument")  # twin, the interpreter's code (gpl/errors.py)
-NOT_SUPPORTED = (-3103, "Not supported by the twin")  # twin
-FRAME_LOOP = (-3104, "Reference frames form a loop")  # twin
-INVALID_SIGNAL = (-3105, "Invalid signal number")  # twin
-FILE_NOT_FOUND = (-3110, "File not found")  # twin
-INVALID_PATH = (-3111, "Invalid file path")  # twin
-FILE_CLOSED = (-3112, "File is closed")  # twin
-SOCKET_ERROR = (-3120, "Socket error")  # twin
-SOCKET_TIMEOUT = (-3121, "Socket timeout")  # twin
-MODBUS_EXCEPTION = (-3130, "Modbus exception response")  # twin
-MODBUS_TIMEOUT = (-3131, "Modbus timeout")  # twin
-THREAD_ERROR = (-3140, "Invalid thread operation")  # twin
-CONVEYOR_LIMIT = (-3150, "Conveyor location outside the conveyor limits")  # twin
-CONVEYOR_JOINT_MOTION = (-3151, "Joint-interpolated motion to or from a conveyor")  # twin
+POWER_OFF = (-1046, "Power not enabled")  # Brooks error list
+NOT_HOMED = (-1021, "Robot not homed")  # Brooks error list
+LOCATION_OUT_OF_RANGE = (-1033, "Invalid Cartesian value")  # Brooks error list (a pose the arm cannot take)
+STRAIGHT_CONFIG = (-1042, "Can't change robot config")  # Brooks error list
+NOT_CARTESIAN = (-762, "Location not a Cartesian type")  # Brooks error list
+NOT_ANGLES = (-763, "Location not an angles type")  # Brooks error list
+NOTHING_ARGUMENT = (errors.NULL_OBJECT, errors.message(errors.NULL_OBJECT))  # the interpreter's code
+INVALID_ARGUMENT = (errors.INVALID_ARGUMENT, errors.message(errors.INVALID_ARGUMENT))  # the interpreter's code
+NOT_SUPPORTED = (-204, "Not implemented")  # Brooks error list; the detail says why the twin lacks it
+FRAME_LOOP = (-809, "Expression too complex")  # Brooks error list (a reference frame that refers to itself)
+INVALID_SIGNAL = (-1517, "Invalid signal number")  # Brooks error list
+FILE_NOT_FOUND = (-3110, "File not found")  # twin (the published list has no file-system codes)
+INVALID_PATH = (-3111, "Invalid file path")  # twin (see FILE_NOT_FOUND)
+FILE_CLOSED = (-3112, "File is closed")  # twin (see FILE_NOT_FOUND)
+SOCKET_ERROR = (-1703, "No connection")  # Brooks error list
+INVALID_NETWORK_ADDRESS = (-1704, "Invalid network address")  # Brooks error list
+SOCKET_NOT_OPEN = (-1707, "Socket not open")  # Brooks error list
+CONNECTION_CLOSED = (-1708, "Connection closed")  # Brooks error list
+VISION_CONNECT = (-4000, "Cannot connect to vision server")  # Brooks error list
+SOCKET_TIMEOUT = (-1705, "Network timeout")  # Brooks error list
+MODBUS_EXCEPTION = (-1730, "Modbus/RIO exception")  # Brooks error list
+MODBUS_TIMEOUT = (-1731, "Modbus/RIO device timeout")  # Brooks error list
+THREAD_ERROR = (-702, "Undefined thread")  # Brooks error list
+CONVEYOR_LIMIT = (-1053, "Beyond conveyor limits while tracking")  # Brooks error list
+CONVEYOR_JOINT_MOTION = (-1011, "Illegal during special Cartesian mode")  # Brooks error list (a joint motion while tracking)
 
 # Errors the shared controller raises with V+ codes, as GPL reports them.
 _FROM_VPLUS = {

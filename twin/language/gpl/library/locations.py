@@ -83,11 +83,11 @@ class GplLocation:
     # ------------------------------------------------------------ checks
     def _cartesian(self) -> None:
         if self._type != CARTESIAN:
-            raise codes.fail(codes.WRONG_LOCATION_TYPE, "needs a Cartesian Location")
+            raise codes.fail(codes.NOT_CARTESIAN, "needs a Cartesian Location")
 
     def _angles_type(self) -> None:
         if self._type != ANGLES:
-            raise codes.fail(codes.WRONG_LOCATION_TYPE, "needs an Angles Location")
+            raise codes.fail(codes.NOT_ANGLES, "needs an Angles Location")
 
     # ------------------------------------------------------------ poses
     def total(self) -> Location:
