@@ -721,3 +721,31 @@ def test_source_angles_and_power_state_mode(tmp_path):
 """)
     assert report.errors == []
     assert report.output.splitlines() == ["0", "20", "0.000", "0.000", "20.000", "-15.000"]
+
+
+def test_pdb_as_the_tcp_command_server_reads_it(tmp_path):
+    """A unit and sub unit of 0 are the first (the controller's .pac files write
+    "DI: 2000, 0, 0, 0"), and PDbNum with array_index 0 reads or sets the first value:
+    the TCP Command Server 3.0 reads Controller.PdbNum(2000, robot, 0, 0) (number of
+    axes), PdbNum(2007, robot, 0, 0) (the robot model number, 400 for a PreciseFlex 400
+    in robot01.pac) and PdbNum(113) (PDB: controller type, 10 for the next generation
+    controller)."""
+    report = on_cell(tmp_path, """
+        Console.WriteLine(CStr(Controller.PdbNum(2000, 1, 0, 0)) & " " & CStr(Controller.PdbNum(2007, 1, 0, 0)))
+        Console.WriteLine(CStr(Controller.PdbNum(113)) & " " & Controller.PDb(2002, 0, 0))
+        Controller.PdbNum(2803, 1, 0, 0) = -3
+        Console.WriteLine(Controller.PDb(2803, 0, 0, 0))
+""")
+    assert report.errors == []
+    assert report.output.splitlines() == ["4 0", "10 Robot 1", "-3,-9,-9,-9"]
+
+
+def test_pdb_robot_model_number_of_the_pf400(tmp_path):
+    """DataID 2007 "Robot model number or version" is 400 on the PreciseFlex 400 bench
+    (robot01.pac of a PF400), as the TCP Command Server's RobType expects."""
+    scene = Path(__file__).resolve().parents[1] / "scenes" / "pf400_plates.toml"
+    report = run_program(main_project(tmp_path, """
+        Console.WriteLine(CStr(Controller.PdbNum(2007, 1, 0, 0)) & " " & Controller.PDb(2000))
+"""), scene=scene, max_sim_time=5.0).report
+    assert report.errors == []
+    assert report.output.splitlines() == ["400 4"]  # the twin models the arm's 4 axes (its gripper apart)

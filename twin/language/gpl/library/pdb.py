@@ -63,6 +63,12 @@ def _model(attribute: str) -> Callable[[Any], list]:
     return values
 
 
+def _model_number(rt) -> int:
+    """400 for the PreciseFlex 400 model (its robot01.pac value, which the TCP Command
+    Server reads to know the robot), 0 for a robot that is no PreciseFlex."""
+    return 400 if "pf400" in rt.robot.kin.name.lower() else 0
+
+
 def _test_speed(rt) -> list:
     return [float(rt.robot.settings.monitor_speed)]
 
@@ -98,6 +104,7 @@ TABLE: dict[int, Entry] = {
     101: Entry("Controller model", "str", _const("twin"), READ_ONLY),  # PDB
     103: Entry("Full software version", "str", _const("GPL 4.2 (twin digital twin)"), READ_ONLY),  # PDB
     104: Entry("Software version", "int", _const(4), READ_ONLY),  # PDB
+    113: Entry("Controller type", "int", _const(10), READ_ONLY),  # PDB (DataID 102: "10 = Next generation controller")
     109: Entry("Controller name", "str", _const("twin")),  # .pac controller
     125: Entry("Serial console enable", "bool", _const(True)),  # manual L2859, .pac controller
     212: Entry("Auto home at startup", "bool", _const(False)),  # .pac controller; PDB homing setup
@@ -116,6 +123,7 @@ TABLE: dict[int, Entry] = {
     2000: _robot("Number of axes", "int", lambda rt: [_axes(rt)], READ_ONLY),  # PDB
     2002: _robot("Robot Name", "str", _const("Robot 1")),  # PDB
     2003: _robot("Axis Mask", "int", lambda rt: [(1 << _axes(rt)) - 1], READ_ONLY),  # PDB
+    2007: _robot("Robot model number or version", "int", lambda rt: [_model_number(rt)], READ_ONLY),  # .pac robot
     # Speeds and accelerations: the robot model's limits, which the planner uses
     2700: _robot("100% joint speeds in (mm or deg)/sec", "num", _model("max_velocity"), READ_ONLY),  # .pac robot
     2702: _robot("100% joint accels in (mm or deg)/sec^2", "num", _model("max_acceleration"),
@@ -168,7 +176,10 @@ def value(rt, dataid: int, index: int = 1):
 
 
 def _lookup(rt, dataid, unit, unit2) -> tuple[Entry, list]:
-    dataid, unit, unit2 = integer(dataid), integer(unit), integer(unit2)
+    """The entry and values of `dataid`; a unit or sub unit of 0 is the first one, as the
+    controller's own .pac files write "DI: 2000, 0, 0, 0" and the TCP Command Server reads
+    Controller.PdbNum(2000, robot, 0, 0)."""
+    dataid, unit, unit2 = integer(dataid), integer(unit) or 1, integer(unit2) or 1
     entry = TABLE.get(dataid)
     if entry is None:
         raise codes.fail(codes.UNKNOWN_DATAID, str(dataid))
@@ -200,8 +211,10 @@ def read(rt, dataid, unit, unit2, index, numeric: bool):
     index = integer(index)
     if numeric and entry.kind == "str":
         raise codes.fail(codes.INVALID_ARGUMENT, f"DataID {integer(dataid)} ({entry.label}) is not numeric")
-    if index == 0 and not numeric:
-        return ",".join(_shown(entry, v) for v in values)
+    if index == 0:  # PDb: every value; PDbNum (one number): the first
+        if not numeric:
+            return ",".join(_shown(entry, v) for v in values)
+        index = 1
     value = values[_element(integer(dataid), values, index)]
     if numeric:
         return float(value)
@@ -217,6 +230,8 @@ def write(rt, dataid, unit, unit2, index, value, numeric: bool) -> None:
         raise codes.fail(codes.INVALID_ARGUMENT, f"DataID {dataid} ({entry.label}) is not numeric")
     convert = _CONVERT[entry.kind]
     new = list(values)
+    if index == 0 and numeric:  # PDbNum sets one number: the first
+        index = 1
     if index == 0:  # PDb with every value: a comma separated list
         items = text(value).split(",") if len(values) != 1 else [value]
         if len(items) != len(values):
