@@ -749,3 +749,34 @@ def test_pdb_robot_model_number_of_the_pf400(tmp_path):
 """), scene=scene, max_sim_time=5.0).report
     assert report.errors == []
     assert report.output.splitlines() == ["400 4"]  # the twin models the arm's 4 axes (its gripper apart)
+
+
+def test_system_state_power_and_homing_dataids_and_traj_state(tmp_path):
+    """What the TCP Command Server 3.0 reads and writes: DataID 234 the system state (7
+    "Power off - waiting for power request TRUE", 20 "Power on - ready to have GPL attach
+    robot", 21 "GPL project attached to robot", the server's own labels), 241 "Power enable"
+    (Brooks error list, -1600) turns power on, 213 = 1 homes every robot (its HomeAll), 111
+    the number of robots; Robot.TrajState 0 "Halted" with power off, 1 "Idle", 3 "Position
+    mode - constant" while a motion runs (its DestC / DestJ test `state <= 1`)."""
+    report = on_cell(tmp_path, """
+        Dim target As Location
+        Dim p As New Profile
+        Console.WriteLine(Controller.PDb(234) & " " & CStr(Robot.TrajState(1)) & " " & CStr(Controller.PdbNum(111)))
+        Controller.PDbNum(241, 0, 0, 0) = 1
+        Console.WriteLine(Controller.PDb(234) & " " & CStr(Controller.PowerEnabled) & " " & CStr(Robot.TrajState(1)))
+        Controller.PDbNum(213) = 1
+        Console.WriteLine(CStr(Robot.Homed) & " " & Controller.PDb(213))
+        Robot.Attached = 1
+        Console.WriteLine(Controller.PDb(234))
+        target = Robot.WhereAngles
+        target.Angle(1) = target.Angle(1) + 30
+        Move.Loc(target, p)
+        Thread.Sleep(100)
+        Console.WriteLine(CStr(Robot.TrajState(1)))
+        Move.WaitForEOM
+        Console.WriteLine(CStr(Robot.TrajState(1)))
+        Controller.PDbNum(241) = 0
+        Console.WriteLine(Controller.PDb(234) & " " & CStr(Controller.PowerEnabled))
+""")
+    assert report.errors == []
+    assert report.output.splitlines() == ["7 0 1", "20 True 1", "True 0", "21", "3", "1", "7 False"]

@@ -129,6 +129,14 @@ def destination_joints(rt) -> np.ndarray:
     return state.dest_q
 
 
+def _start_joints(rt) -> np.ndarray:
+    """Joints where the next motion starts (Robot.SourceAngles): the last destination's; a
+    destination on a moving belt has none fixed, so the joints commanded now."""
+    if isinstance(rt.robot.destination(), Location):
+        return np.array(destination_joints(rt))
+    return np.array(rt.robot.q_command)
+
+
 def _settle(rt):
     try:
         yield from rt.robot.wait_stopped()
@@ -144,7 +152,7 @@ def _go(rt, flange: Location, profile: GplProfile, righty: bool | None, dest_q: 
     robot = rt.robot
     if state.last_in_range > 0:
         yield from _settle(rt)
-    source, source_q = robot.destination(), np.array(destination_joints(rt))
+    source, source_q = robot.destination(), _start_joints(rt)
     robot.set_speed(profile.Speed)  # this motion only
     if righty is not None and not profile.Straight:  # a straight line keeps the configuration
         robot.request_configuration(righty)

@@ -41,6 +41,7 @@ class Entry:
     # A value the controller itself holds (rt, values) -> None: writing the DataID sets it
     # there too, and `default` reads it back, so both ways of setting it agree.
     store: Callable[[Any, list], None] | None = None
+    live: bool = False  # `default` reads the controller's state: read afresh each time
 
 
 def _const(*values) -> Callable[[Any], list]:
@@ -82,6 +83,43 @@ def _set_test_speed(rt, values: list) -> None:
     rt.robot.set_speed(speed, monitor=True)
 
 
+# System state (DataID 234), as the TCP Command Server 3.0 labels it: 7 "Power off - waiting
+# for power request TRUE", 20 "Power on - ready to have GPL attach robot", 21 "GPL project
+# attached to robot".
+SYS_POWER_OFF, SYS_POWER_ON, SYS_ATTACHED = 7, 20, 21
+
+
+def _system_state(rt) -> list:
+    state = robot_state(rt)
+    if not state.power:
+        return [SYS_POWER_OFF]
+    return [SYS_ATTACHED if state.attached_by is not None else SYS_POWER_ON]
+
+
+def _power(rt) -> list:
+    return [robot_state(rt).power]
+
+
+def _set_power(rt, values: list) -> None:
+    """DataID 241 is what Controller.PowerEnabled sets (error -1600: "Power enable" (DataID
+    241) set to FALSE turns power off): at once in the twin; off stops any motion."""
+    state = robot_state(rt)
+    state.power = bool(values[0])
+    if not state.power:
+        rt.robot.stop()
+
+
+def _home_all(rt, values: list) -> None:
+    """Writing 1 to DataID 213 homes every robot (the TCP Command Server's HomeAll):
+    instantaneous, with high power on (else -1046), as Robot.HomeAll."""
+    if values[0]:
+        state = robot_state(rt)
+        if not state.power:
+            raise codes.fail(codes.POWER_OFF)
+        state.homed = True
+    values[0] = 0
+
+
 def _mounted_tool(rt) -> list:
     """The restart tool of the gripper the cell mounts: its TCP in the flange frame (mm), as
     the integrator configures the controller for its tool; none (zeros) without a cell."""
@@ -104,11 +142,19 @@ TABLE: dict[int, Entry] = {
     101: Entry("Controller model", "str", _const("twin"), READ_ONLY),  # PDB
     103: Entry("Full software version", "str", _const("GPL 4.2 (twin digital twin)"), READ_ONLY),  # PDB
     104: Entry("Software version", "int", _const(4), READ_ONLY),  # PDB
+    # 105, 106: the parts of the version after 104's major number, as the TCP Command Server
+    # 3.0 encodes it (104 * 1000000 + 105 * 10000 + 106); their PDB labels are not public.
+    105: Entry("Software version, minor", "int", _const(2), READ_ONLY),  # TCS 3.0 Globals
+    106: Entry("Software version, revision", "int", _const(0), READ_ONLY),  # TCS 3.0 Globals
+    111: Entry("Number of robots", "int", _const(1), READ_ONLY),  # TCS 3.0 Cmd_SelectRobot (-1001 beyond it)
     113: Entry("Controller type", "int", _const(10), READ_ONLY),  # PDB (DataID 102: "10 = Next generation controller")
     109: Entry("Controller name", "str", _const("twin")),  # .pac controller
     125: Entry("Serial console enable", "bool", _const(True)),  # manual L2859, .pac controller
     212: Entry("Auto home at startup", "bool", _const(False)),  # .pac controller; PDB homing setup
+    213: Entry("Home all robots", "int", _const(0), store=_home_all),  # TCS 3.0 Cmd_HomeAll
+    234: Entry("System state", "int", _system_state, READ_ONLY, live=True),  # TCS 3.0 Cmd_SysState, Globals labels
     240: Entry("Automatic power on", "bool", _const(False)),  # .pac controller
+    241: Entry("Power enable", "bool", _power, store=_set_power),  # Brooks error list (-1600); TCS 3.0 Cmd_Hp
     262: Entry("Timeout waiting for power to come on in sec", "num", _const(1.0)),  # .pac controller
     323: Entry("Error log file", "str", _const("")),  # manual L3018, .pac controller
     424: Entry("Vision server IP address", "str", _const("127.0.0.1")),  # manual L3094
@@ -155,7 +201,7 @@ class Database:
 
     def of(self, rt, dataid: int) -> tuple[Entry, list]:
         entry = TABLE[dataid]
-        if entry.store is not None or dataid not in self.values:
+        if entry.live or entry.store is not None or dataid not in self.values:
             try:
                 self.values[dataid] = list(entry.default(rt))
             except AttributeError:  # a value taken from the robot model, in a run without a cell

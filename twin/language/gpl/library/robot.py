@@ -19,6 +19,8 @@ from .state import check_robot, config_of, robot_state, to_gpl_angles, tool_pose
 
 # Controller.PowerState values (twin-defined: the manual does not list the sequence's states).
 POWER_STATE_OFF, POWER_STATE_ON = 0, 20
+# Robot.TrajState values (TCP Command Server 3.0 state labels).
+TRAJ_HALTED, TRAJ_IDLE, TRAJ_MOVING = 0, 1, 3
 
 
 @gpl_class("Robot")
@@ -189,11 +191,16 @@ class Robot:
 
     @shared
     def TrajState(rt, robot=1, selector=0) -> int:
-        """Twin-defined codes: 0 idle, 1 moving.  `Robot.TrajState(robot, n)` as field code
-        writes it: the selector is checked as a number and gives the same state."""
+        """The trajectory state as the TCP Command Server 3.0 labels it: 0 "Halted" (high
+        power off), 1 "Idle", 3 "Position mode - constant" while a motion runs (the twin
+        does not report its accel / decel / blend phases, 2, 5, 4).  `Robot.TrajState(rob,
+        n)` as field code writes it: the selector is checked as a number and gives the
+        same state."""
         check_robot(robot)
         number(selector)
-        return 1 if rt.robot.moving else 0
+        if not robot_state(rt).power:
+            return TRAJ_HALTED
+        return TRAJ_MOVING if rt.robot.moving else TRAJ_IDLE
 
     @shared
     def CartMode(rt, robot=1) -> int:
