@@ -142,10 +142,16 @@ def test_pdb_index_and_value_errors(tmp_path):
         Catch ex
             Console.WriteLine(CStr(ex.ErrorCode))
         End Try
+        Try
+            Controller.PDbNum(14002, 1, 0, 0) = 1
+        Catch ex
+            Console.WriteLine(CStr(ex.ErrorCode))
+        End Try
         Console.WriteLine(CStr(Controller.SystemSpeed))
 """)
     assert report.errors == []
-    assert report.output.splitlines() == ["-1509", "-707", "-707", "-209", "50"]
+    # 14002 (release brake, a servo expert command of the PDB's 14000-14999 group): -204
+    assert report.output.splitlines() == ["-1509", "-707", "-707", "-209", "-204", "50"]
 
 
 def test_restart_tool_and_base_come_from_the_database(tmp_path):
@@ -780,3 +786,37 @@ def test_system_state_power_and_homing_dataids_and_traj_state(tmp_path):
 """)
     assert report.errors == []
     assert report.output.splitlines() == ["7 0 1", "20 True 1", "True 0", "21", "3", "1", "7 False"]
+
+
+def test_vision_default_result_and_rapid_decel_as_a_statement(tmp_path):
+    """The TCP Command Server 3.0 asks `glbVision.ResultCount` and `glbVision.Result()`
+    with no tool ("If not specified, return the default result"): the process's last tool
+    (docs/gpl.md); its halt command is the statement `Robot.RapidDecel(robot)` (manual
+    L2176 gives the property form, `Robot.RapidDecel = True`, too)."""
+    scene = Path(__file__).resolve().parents[1] / "scenes" / "scara_vision.toml"
+    report = run_program(main_project(tmp_path, """
+        Dim vis As New Vision
+        Dim r As VisResult
+        Dim far As Location
+        Dim p As New Profile
+        Thread.Sleep(500)
+        vis.Process("Main")
+        Console.WriteLine(CStr(vis.ResultCount) & " " & CStr(vis.ResultCount("inspect")))
+        r = vis.Result()
+        Console.WriteLine(Format(r.Loc.X - vis.Result("inspect", 1).Loc.X, "0.000") & " " & CStr(r.InspectPassed))
+        Controller.PowerEnabled = True
+        Robot.Attached = 1
+        Robot.Home
+        far = Robot.WhereAngles
+        far.Angle(1) = far.Angle(1) + 60
+        Move.Loc(far, p)
+        Thread.Sleep(100)
+        Robot.RapidDecel(1)
+        Move.WaitForEOM
+        Console.WriteLine(CStr(Math.Abs(Robot.WhereAngles.Angle(1) - far.Angle(1)) > 1))
+"""), scene=scene, max_sim_time=20.0).report
+    assert report.errors == []
+    count, inspected = report.output.splitlines()[0].split()
+    assert count == inspected and int(count) >= 1
+    assert report.output.splitlines()[1].startswith("0.000 ")
+    assert report.output.splitlines()[2] == "True"  # stopped short of the destination

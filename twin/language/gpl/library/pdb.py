@@ -29,6 +29,7 @@ from .args import integer, number, text
 from .state import robot_state
 
 READ_ONLY, READ_WRITE = True, False
+SERVO_EXPERT_COMMANDS = (14000, 14999)  # PDB intro's DataID groups; the TCS brake commands use 14002, 14500
 
 
 @dataclass(frozen=True)
@@ -227,6 +228,9 @@ def _lookup(rt, dataid, unit, unit2) -> tuple[Entry, list]:
     Controller.PdbNum(2000, robot, 0, 0)."""
     dataid, unit, unit2 = integer(dataid), integer(unit) or 1, integer(unit2) or 1
     entry = TABLE.get(dataid)
+    if entry is None and SERVO_EXPERT_COMMANDS[0] <= dataid <= SERVO_EXPERT_COMMANDS[1]:
+        raise codes.fail(codes.NOT_SUPPORTED, f"DataID {dataid}: servo expert commands (brakes, motors) act on "
+                                              "hardware the twin does not model")
     if entry is None:
         raise codes.fail(codes.UNKNOWN_DATAID, str(dataid))
     if unit != 1:

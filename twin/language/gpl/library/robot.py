@@ -184,8 +184,16 @@ class Robot:
         robot_state(rt).payload = percent
 
     @shared
+    def RapidDecel(rt, robot=1) -> None:
+        """`Robot.RapidDecel(robot)` as a statement, as the TCP Command Server 3.0's halt
+        command writes it: stops the motion in progress at once."""
+        check_robot(robot)
+        rt.robot.stop()
+
+    @shared
     def set_RapidDecel(rt, value) -> None:
-        """True stops any motion in progress at once."""
+        """`Robot.RapidDecel = True` (manual L2176, a property) stops any motion in progress
+        at once."""
         if value:
             rt.robot.stop()
 

@@ -98,13 +98,15 @@ class Vision:
             yield from wait_ms(self._rt, wait * 1000.0)
         self._status = 3
 
-    def ResultCount(self, tool) -> int:
+    def ResultCount(self, tool="") -> int:
+        """The results of `tool`; without one, of the process's default result (its last
+        tool), as the TCP Command Server 3.0 asks `glbVision.ResultCount`."""
         reply = self._request("COUNT", str(tool))
         if reply[0] != "OK":
             raise codes.GplError(int(reply[1]), reply[2])
         return int(reply[1])
 
-    def Result(self, tool, index=1) -> "VisResult":
+    def Result(self, tool="", index=1) -> "VisResult":
         reply = self._request("RESULT", str(tool), int(index))
         result = VisResult(self._rt)
         if reply[0] != "OK":
