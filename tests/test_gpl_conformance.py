@@ -820,3 +820,37 @@ def test_vision_default_result_and_rapid_decel_as_a_statement(tmp_path):
     assert count == inspected and int(count) >= 1
     assert report.output.splitlines()[1].startswith("0.000 ")
     assert report.output.splitlines()[2] == "True"  # stopped short of the destination
+
+
+def test_exception_messages_of_codes_field_code_throws():
+    """Exception.Message of a code a program sets and throws, as the TCP Command Server
+    3.0 does (-1017 with RobotError, -717, -704, -1001): the messages of the Brooks error
+    code list."""
+    out = output_of("""
+Module M
+    Public Sub Main()
+        Dim codes(3) As Integer
+        Dim i As Integer
+        Dim ex As Exception
+        codes(0) = -1017
+        codes(1) = -717
+        codes(2) = -704
+        codes(3) = -1001
+        For i = 0 To 3
+            Try
+                ex = New Exception
+                ex.ErrorCode = codes(i)
+                If i = 0 Then
+                    ex.RobotError = True
+                    ex.RobotNum = 1
+                End If
+                Throw ex
+            Catch ex
+                Console.WriteLine(CStr(ex.ErrorCode) & " " & ex.Message)
+            End Try
+        Next i
+    End Sub
+End Module
+""")
+    assert out.splitlines() == ["-1017 Not in position control mode: Robot 1", "-717 Invalid number format",
+                                "-704 Missing quote mark", "-1001 Undefined robot"]

@@ -57,6 +57,19 @@ THREAD_ERROR = (-702, "Undefined thread")  # Brooks error list
 CONVEYOR_LIMIT = (-1053, "Beyond conveyor limits while tracking")  # Brooks error list
 CONVEYOR_JOINT_MOTION = (-1011, "Illegal during special Cartesian mode")  # Brooks error list (a joint motion while tracking)
 
+# Controller codes the twin never raises itself but programs Throw or test (the TCP Command
+# Server throws -1017, -1001, -704, -717 and waits out -1029 / -1030 / -1043), with their
+# messages in the Brooks error list, so that Exception.Message shows them.
+CONTROLLER_MESSAGES = {
+    -205: "Missing argument", -704: "Missing quote mark", -705: "Value too small", -706: "Value too large",
+    -714: "Unknown command", -1001: "Undefined robot", -1002: "Invalid axis number",
+    -1017: "Not in position control mode", -1025: "Timeout enabling power", -1028: "Hard E-Stop",
+    -1029: "Asynchronous error", -1030: "Fatal asynchronous error", -1038: "Project generated robot error",
+    -1039: "Position too close", -1040: "Position too far", -1043: "Asynchronous soft error",
+    -1045: "Soft E-STOP", -1052: "Beyond conveyor limits", -1600: "Power off requested",
+    -1702: "Connection refused",
+}
+
 # Errors the shared controller raises with V+ codes, as GPL reports them.
 _FROM_VPLUS = {
     VPLUS_OUT_OF_RANGE: LOCATION_OUT_OF_RANGE,
