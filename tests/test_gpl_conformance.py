@@ -854,3 +854,33 @@ End Module
 """)
     assert out.splitlines() == ["-1017 Not in position control mode: Robot 1", "-717 Invalid number format",
                                 "-704 Missing quote mark", "-1001 Undefined robot"]
+
+
+def test_a_new_locations_zclearance_is_not_set(tmp_path):
+    """Brooks error list -794 *ZClearance property not set*: "When a Location is first
+    created, its ZClearance property is set to a very large number" and Move.Approach to
+    it is this error (the TCP Command Server 3.0 tests `ZClearance > 1E30` before a pick);
+    GDE-generated files write 1E+32 for it."""
+    report = on_cell(tmp_path, """
+        Dim nest As New Location
+        Dim p As New Profile
+        Dim ex As Exception
+        Controller.PowerEnabled = True
+        Robot.Attached = 1
+        Robot.Home
+        nest = Robot.Where
+        Console.WriteLine(CStr(nest.ZClearance > 1E30) & " " & CStr((New Location).ZClearance))
+        Try
+            Move.Approach(nest, p)
+        Catch ex
+            Console.WriteLine(CStr(ex.ErrorCode) & " " & ex.Message)
+        End Try
+        nest.ZClearance = 20
+        Move.Approach(nest, p)
+        Move.WaitForEOM
+        Console.WriteLine(Format(Robot.Where.Z - nest.Z, "0.0"))
+""")
+    assert report.errors == []
+    lines = report.output.splitlines()
+    assert lines[:2] == ["True 1E+32", "-794 ZClearance property not set"]
+    assert abs(abs(float(lines[2])) - 20.0) < 0.2

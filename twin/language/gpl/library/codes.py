@@ -35,6 +35,7 @@ POWER_OFF = (-1046, "Power not enabled")  # Brooks error list
 NOT_HOMED = (-1021, "Robot not homed")  # Brooks error list
 LOCATION_OUT_OF_RANGE = (-1033, "Invalid Cartesian value")  # Brooks error list (a pose the arm cannot take)
 STRAIGHT_CONFIG = (-1042, "Can't change robot config")  # Brooks error list
+ZCLEARANCE_NOT_SET = (-794, "ZClearance property not set")  # Brooks error list (Move.Approach)
 NOT_CARTESIAN = (-762, "Location not a Cartesian type")  # Brooks error list
 NOT_ANGLES = (-763, "Location not an angles type")  # Brooks error list
 NOTHING_ARGUMENT = (errors.NULL_OBJECT, errors.message(errors.NULL_OBJECT))  # the interpreter's code
