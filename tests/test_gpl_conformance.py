@@ -884,3 +884,33 @@ def test_a_new_locations_zclearance_is_not_set(tmp_path):
     lines = report.output.splitlines()
     assert lines[:2] == ["True 1E+32", "-794 ZClearance property not set"]
     assert abs(abs(float(lines[2])) - 20.0) < 0.2
+
+
+def test_a_class_shared_init_runs_at_start_up():
+    """A class's `Private Shared Sub Init()` runs at start-up, before the modules' Init
+    subs and the start procedure: the TCP Command Server 3.0's GpoFile class fills its
+    Shared type-name tables so ("Init routine called automatically at startup"); manual
+    ch. 10 "Special Initialization" describes the module case."""
+    out = output_of("""
+Public Class Names
+    Public Const LAST As Integer = 2
+    Private Shared Label(LAST) As String
+    Private Shared Sub Init()
+        Label(1) = "Integer"
+        Label(2) = "Location"
+        Console.WriteLine("class init")
+    End Sub
+    Public Shared Function Of(ByVal i As Integer) As String
+        Return Label(i)
+    End Function
+End Class
+Module M
+    Public Sub Init()
+        Console.WriteLine("module init " & Names.Of(2))
+    End Sub
+    Public Sub Main()
+        Console.WriteLine(Names.Of(1))
+    End Sub
+End Module
+""")
+    assert out.splitlines() == ["class init", "module init Location", "Integer"]
