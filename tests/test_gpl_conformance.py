@@ -268,6 +268,44 @@ End Module
     assert out == "4 8 4\n"
 
 
+def test_a_class_public_const_is_unqualified_outside_where_it_is_unique():
+    """Brooks error list -772 *Ambiguous Public reference*: "References to top-level public
+    variables do not need to be qualified by their containing module or class provided that
+    they are unique"; the TCP Command Server 3.0 tests `sta.flags And STA_FL_PAL` in its
+    modules with STA_FL_PAL a Public Const of class Station.  The same name Public in two
+    classes must be qualified (-2009)."""
+    out = output_of("""
+Public Class Station
+    Public Const STA_FL_PAL As Integer = &H0001
+    Public Shared Count As Integer = 2
+    Public flags As Integer
+End Class
+Module M
+    Public Sub Main()
+        Dim s As New Station
+        s.flags = 17
+        Console.WriteLine(CStr(s.flags And STA_FL_PAL) & " " & CStr(Count))
+    End Sub
+End Module
+""")
+    assert out == "1 2\n"
+    with pytest.raises(ProgramError) as caught:
+        output_of("""
+Class A
+    Public Const FLAG As Integer = 1
+End Class
+Class B
+    Public Const FLAG As Integer = 2
+End Class
+Module M
+    Public Sub Main()
+        Console.WriteLine(CStr(FLAG))
+    End Sub
+End Module
+""")
+    assert caught.value.code == -2009 and caught.value.line == 10
+
+
 def test_module_const_from_another_modules_member_whatever_the_file_order(tmp_path):
     """ch. 10 "Special Initialization": module variables are initialised module by module
     in load order; a Const that uses a Const of a module loaded later still gets its value
