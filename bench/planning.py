@@ -1,9 +1,11 @@
 """Planning time per motion on the Cobra s600: MOVE (IK + joint-space toppra) and MOVES
 (straight line: waypoints by IK, spline, toppra with a TCP speed limit), ~50 random moves
 each, plus the cost of sampling a planned move at a 2 ms physics step; then the same two
-on the Cartesian gantry (damped least-squares IK).  Not a test.
+on the Cartesian gantry (damped least-squares IK).  With --grid-error, instead: how much
+longer than on a fine toppra grid the motions come out on the planner's grid (the figure
+that chose `N_GRID_JOINT`, `REFINE_CELLS` and `N_GRID_STRAIGHT`).  Not a test.
 
-    .venv/bin/python bench/planning.py [--moves 50] [--seed 0]
+    .venv/bin/python bench/planning.py [--moves 50] [--seed 0] [--grid-error]
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from twin.controller.kinematics import KinematicsError, RobotKinematics
+from twin.controller import trajectory
 from twin.controller.trajectory import plan_joint_move, plan_straight_move
 
 ROBOT = Path(__file__).resolve().parents[1] / "models" / "robots" / "cobra_s600.xml"
@@ -89,11 +92,49 @@ def percentile(values: list[float], p: float) -> float:
     return ordered[round(p / 100 * (len(ordered) - 1))]
 
 
+def grid_error(moves: int = 200, seed: int = 0, fine: int = 400) -> dict[str, np.ndarray]:
+    """Relative duration error (planner's grid / `fine`-point grid - 1) of `moves` random
+    Cobra MOVEs and MOVESs."""
+    kin = RobotKinematics.from_mjcf(ROBOT)
+    vmax, amax = kin.max_velocity, kin.max_acceleration
+    rng = np.random.default_rng(seed)
+    joint, straight = [], []
+    while len(joint) < moves:
+        q0, q1 = _random_q(kin, rng), _random_q(kin, rng)
+        joint.append((q0, kin.ik(kin.fk(q1), q0, righty=True)))
+    while len(straight) < moves:
+        q0, T1 = _random_q(kin, rng), kin.fk(_random_q(kin, rng))
+        try:
+            plan_straight_move(kin, q0, T1, vmax, amax, 1.0)
+        except KinematicsError:
+            continue
+        straight.append((q0, T1))
+
+    def durations() -> tuple[np.ndarray, np.ndarray]:
+        return (np.array([plan_joint_move(q0, q1, vmax, amax).duration for q0, q1 in joint]),
+                np.array([plan_straight_move(kin, q0, T1, vmax, amax, 1.0).duration for q0, T1 in straight]))
+
+    chosen = durations()
+    saved = trajectory.N_GRID_JOINT, trajectory.N_GRID_STRAIGHT
+    trajectory.N_GRID_JOINT = trajectory.N_GRID_STRAIGHT = fine
+    try:
+        reference = durations()
+    finally:
+        trajectory.N_GRID_JOINT, trajectory.N_GRID_STRAIGHT = saved
+    return {"MOVE": chosen[0] / reference[0] - 1, "MOVES": chosen[1] / reference[1] - 1}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--moves", type=int, default=50)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--grid-error", action="store_true", help="duration error of the grid against a 400-point one")
     args = ap.parse_args()
+    if args.grid_error:
+        for kind, err in grid_error(max(args.moves, 200), args.seed).items():
+            print(f"{kind:<6} duration vs a 400-point grid: mean {np.mean(err):+.3%}, max {np.max(err):+.3%}, "
+                  f"min {np.min(err):+.3%} ({len(err)} motions)")
+        return
     m = measure(args.moves, args.seed)
     print(f"{'planning (ms)':<22}{'n':>4}{'median':>10}{'p95':>10}{'max':>10}")
     _row("MOVE (IK + toppra)", m["move"], f"motion median {statistics.median(m['move_s']):.3f} s")

@@ -1,10 +1,12 @@
 """`twin serve` as a test's peer, in a subprocess, on free ports (`--port P=0`: test runs
-side by side never fight over 10100 or 11000); stopped with Ctrl-C (SIGINT)."""
+side by side never fight over 10100 or 11000); stopped with Ctrl-C (SIGINT).  `Tcs`: a raw
+client of the TCP Command Server (one command line, one reply line)."""
 
 from __future__ import annotations
 
 import re
 import signal
+import socket
 import subprocess
 import sys
 import threading
@@ -63,3 +65,29 @@ def serving(arguments: list[str], program_ports: list[int]):
     finally:
         if process.poll() is None:
             process.kill()
+
+
+class Tcs:
+    """A raw TCS client: `tcs("wherej")` sends the line and returns the reply line."""
+
+    def __init__(self, port: int):
+        self.sock = socket.create_connection(("127.0.0.1", port), timeout=60)
+        self.lines = self.sock.makefile("rb")
+
+    def __call__(self, command: str) -> str:
+        self.sock.sendall(command.encode() + b"\n")
+        line = self.lines.readline()
+        assert line.endswith(b"\r\n"), line
+        return line[:-2].decode()
+
+    def close(self) -> None:
+        self.sock.sendall(b"exit\n")
+        assert self.lines.readline() == b""  # exit: closed without a reply
+        self.sock.close()
+
+
+def numbers(reply: str) -> list[float]:
+    """The data of a successful reply as numbers."""
+    code, *data = reply.split()
+    assert code == "0", reply
+    return [float(v) for v in data]

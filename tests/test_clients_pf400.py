@@ -43,7 +43,7 @@ def test_inverse_kinematics_round_trips_in_both_arm_configurations(kin, pose, ri
     q = kin.ik(T, np.array([0.2, 0.0, 0.0, 0.0]), righty=righty)
     assert kin.fk(q) == pytest.approx(T, abs=1e-9)
     assert kin.is_righty(q) == righty
-    assert (q[2] > 0) == righty  # J3, the elbow, carries the configuration
+    assert (q[2] < math.pi) == righty  # J3, the elbow (12 to 348 deg), carries the configuration
 
 
 def test_a_tilted_tool_or_a_height_past_the_column_is_refused(kin):
@@ -60,6 +60,12 @@ def test_a_tilted_tool_or_a_height_past_the_column_is_refused(kin):
     with pytest.raises(KinematicsError) as err:
         kin.ik(behind, np.zeros(4), righty=False)  # lefty there needs the shoulder past 93 deg
     assert err.value.joint == 2
+    # 589 mm out: within the 591 mm of the two links, but the elbow would have to open
+    # to 9.4 deg, and the PF400's J3 stops at 12 deg (it never stretches the arm).
+    far = vplus_to_matrix([589, 0, 100, 0, 90, 180])
+    with pytest.raises(KinematicsError) as err:
+        kin.ik(far, np.zeros(4), righty=True)
+    assert err.value.joint == 3
 
 
 def test_a_vplus_program_moves_the_plate_between_the_nests():
@@ -82,5 +88,5 @@ def test_a_gpl_program_for_the_pf400_runs_in_its_own_coordinates():
     result = run_program(DATA / "gpl" / "pf400_plate", scene="scenes/pf400_plates.toml")
     report = result.report
     assert report.errors == []
-    assert report.output.splitlines() == ["at pick 350 -150 pitch 90 config 1", "J1 97.2", "holding True"]
+    assert report.output.splitlines() == ["at pick 350 -150 pitch 90 config 1", "J1 97", "holding True"]
     assert report.regions["nest_b"] == 1

@@ -4,7 +4,9 @@ length, message type, comm type, reply code, body).
 
 The server runs in this process on the SCARA cell (as fast as it goes); the client
 runs in a thread.  Measured joint positions are taken between major cycles, when
-the client has had its reply and the robot is at rest.
+the client has had its reply and the robot is at rest; every cycle's joints are kept,
+so that fed-back joints are compared with the joints of the cycle they were read in
+(which cycle that is depends on the machine's load, the comparison does not).
 """
 
 from __future__ import annotations
@@ -118,6 +120,7 @@ class Run:
 
     def _run(self, client):
         self.requests: queue.Queue = queue.Queue()
+        self.history: list[np.ndarray] = []  # the robot's joints at each major cycle
         self.done = threading.Event()
         self.failure: BaseException | None = None
         self.started = start_program("programs/vplus/ros_server.pg")
@@ -140,6 +143,7 @@ class Run:
         assert self.result.report.errors == []
 
     def _between_cycles(self) -> bool:
+        self.history.append(self.started.simulation.cell.robot_qpos().copy())
         while not self.requests.empty():
             answer = self.requests.get()
             answer.put(self.started.simulation.cell.robot_qpos().copy())
@@ -149,6 +153,16 @@ class Run:
         answer: queue.Queue = queue.Queue()
         self.requests.put(answer)
         return answer.get(timeout=30)
+
+
+def float32_of_a_cycle(joints, history: list[np.ndarray]) -> float:
+    """How far (in float32 steps) fed-back `joints` are from the float32 rounding of the
+    nearest cycle's simulated joints: 0 or 1 when they are those joints as IEEE singles
+    (the server converts degrees and mm back to rad and m in double before rounding)."""
+    fed = np.array(joints[:4], dtype=np.float32).astype(float)
+    steps = [np.max(np.abs(fed - q.astype(np.float32)) / np.spacing(np.abs(q).astype(np.float32)))
+             for q in history]
+    return float(min(steps))
 
 
 def test_every_commanded_joint_target_is_reached_and_fed_back():
@@ -174,7 +188,11 @@ def test_every_commanded_joint_target_is_reached_and_fed_back():
         error = np.abs(measured - np.array(target))
         assert np.degrees(error[[0, 1, 3]]).max() < 0.01, (k, np.degrees(error))
         assert error[2] * 1000 < 0.01  # mm on the quill
-        assert np.abs(np.array(joints[:4]) - measured).max() < 2e-5  # float32 of the same joints
+        # The feedback is the simulated joints of one cycle, as float32 (bit for bit but
+        # the last place), and it too is within the 0.01 degree bar of the target.
+        assert float32_of_a_cycle(joints, run.history) <= 1.0, k
+        fed_error = np.abs(np.array(joints[:4]) - np.array(target))
+        assert np.degrees(fed_error[[0, 1, 3]]).max() < 0.01 and fed_error[2] * 1000 < 0.01, k
         assert joints[4:] == (0.0,) * 6
         drives, estop, code, in_error, in_motion, mode, possible = status
         assert (drives, estop, code, in_error, in_motion, mode, possible) == (1, 0, 0, 0, 0, 2, 1)
@@ -203,4 +221,27 @@ def test_a_client_that_leaves_mid_message_leaves_the_server_serving_the_next():
     output = run.result.report.output
     assert "client left (30 bytes of a message dropped)" in output
     assert output.count("client connected") == 2
+    assert run.result.report.errors == []
+
+
+def test_a_state_client_that_leaves_leaves_the_feedback_serving_the_next():
+    seen = []
+
+    def client(run: Run):
+        first = connect(STATE_PORT)
+        seen.append(receive_message(first)[0])
+        receive(first, 7)  # part of the next message, then gone
+        first.close()
+        second = connect(STATE_PORT)
+        feedback = Feedback(second)
+        joints, status = feedback.after(0)
+        seen.append((joints, status, run.measured()))
+        second.close()
+
+    run = Run(client)
+    first_kind, (joints, status, measured) = seen
+    assert first_kind in (JOINT_POSITION, STATUS)
+    assert float32_of_a_cycle(joints, run.history) <= 1.0  # the next client is fed the simulated joints
+    assert np.abs(np.array(joints[:4]) - measured).max() < 1e-3  # at rest: the same pose
+    assert status == (1, 0, 0, 0, 0, 2, 1)
     assert run.result.report.errors == []

@@ -8,32 +8,9 @@ import socket
 
 import pytest
 
-from clients_helpers import serving
+from clients_helpers import Tcs, numbers, serving
 
 PORT = 10100
-
-
-class Tcs:
-    def __init__(self, port: int):
-        self.sock = socket.create_connection(("127.0.0.1", port), timeout=60)
-        self.lines = self.sock.makefile("rb")
-
-    def __call__(self, command: str) -> str:
-        self.sock.sendall(command.encode() + b"\n")
-        line = self.lines.readline()
-        assert line.endswith(b"\r\n"), line
-        return line[:-2].decode()
-
-    def close(self) -> None:
-        self.sock.sendall(b"exit\n")
-        assert self.lines.readline() == b""  # exit: closed without a reply
-        self.sock.close()
-
-
-def numbers(reply: str) -> list[float]:
-    code, *data = reply.split()
-    assert code == "0", reply
-    return [float(v) for v in data]
 
 
 def test_the_command_set_over_a_raw_socket():
@@ -55,6 +32,10 @@ def test_the_command_set_over_a_raw_socket():
         assert tcs("payload 25") == "0" and tcs("payload") == "0 25"
         assert tcs("pd 100") == "0 Brooks Automation"
         assert tcs("pd 2000 1") == "0 4"  # number of axes of robot 1
+        assert tcs("pd 2003 1") == "0 15"  # axis mask: axes 1 to 4
+        assert tcs("pd 16050 1") == "0 0,302,289" + ",0" * 13  # the link lengths, as a PF400 lists them
+        assert tcs("pd 16077 1") == "0 401.5,93,348,960"  # soft limits (the field unit's)
+        assert tcs("pd 16078 1") == "0 1.5,-93,12,-960"
         assert tcs("sig 7 1") == "0" and tcs("sig 7") == "0 7 -1"
         assert tcs("tool") == "0 -60 0 50 0 0 0"  # the gripper's pads (the TCS sets it)
         assert tcs("base") == "0 0 0 0 0"
@@ -103,10 +84,42 @@ def test_the_command_set_over_a_raw_socket():
         assert tcs("move x 1") == "-717 *Invalid number format*"
         assert tcs("locXyz 0") == "-707 *Value out-of-range*"
         assert tcs("moveOneAxis 9 1 1") == "-1002 *Invalid axis number*"
+        # No rail on this bench (scenes/pf400_rail.toml has one: test_clients_rail.py).
+        assert tcs("Rail 1 250") == "0" and tcs("Rail 1") == "0 250"  # kept with the station all the same
+        assert tcs("MoveRail 1 1") == "-1002 *Invalid axis number*"
+        assert tcs("MoveRail 0") == "0"  # nothing pending to cancel
+        assert tcs("moveOneAxis 6 100 1") == "-1002 *Invalid axis number*"
+        assert tcs("moveJ 1 200 -30 90 -20 110 50") == "-1002 *Invalid axis number*"
+        assert tcs("moveExtraAxis 100") == "-1002 *Invalid axis number*"
+        assert tcs("MoveRail 1 3") == "-202 *Invalid argument*"
         tcs.close()
 
         # The next client is served.
         again = Tcs(served.port(PORT))
         assert again("attach") == "0 -1"
         again.close()
+    assert served.returncode == 0, served.stderr
+
+
+def test_clients_that_leave_mid_command_or_before_the_reply_leave_the_server_serving():
+    with serving(["programs/gpl/tcs", "--scene", "scenes/pf400_plates.toml", "--fast"], [PORT]) as served:
+        port = served.port(PORT)
+        setup = Tcs(port)
+        assert setup("hp 1 10") == "0" and setup("attach 1") == "0" and setup("home") == "0"
+        setup.close()
+        # Half a command, then gone: the half line is dropped with the connection.
+        half = socket.create_connection(("127.0.0.1", port), timeout=60)
+        half.sendall(b"moveJ 1 200 -3")
+        half.close()
+        # A whole motion command, then gone before its reply: the motion still runs to
+        # its end, the reply to nobody is lost, and the server takes the next client.
+        hasty = socket.create_connection(("127.0.0.1", port), timeout=60)
+        hasty.sendall(b"moveJ 1 200 -30 90 -20\n")
+        hasty.close()
+        after = Tcs(port)
+        assert after("nop") == "0"
+        assert after("waitForEom") == "0"
+        assert numbers(after("wherej"))[:4] == pytest.approx([200, -30, 90, -20], abs=0.05)
+        assert after("attach") == "0 -1"
+        after.close()
     assert served.returncode == 0, served.stderr

@@ -10,6 +10,7 @@ from twin.controller.kinematics import (
     JOINT_LIMIT,
     LOCATION_OUT_OF_RANGE,
     KinematicsError,
+    LinearRail,
     RobotKinematics,
 )
 from twin.controller.location import Location
@@ -188,3 +189,52 @@ def test_gantry_ik_round_trip_over_the_whole_workspace():
         with pytest.raises(KinematicsError) as info:
             gantry.ik(_pose(x, y, z, 180.0), seed)
         assert info.value.code == LOCATION_OUT_OF_RANGE
+
+
+def _line_poses(kin, q0, p1, yaw_deg, n):
+    """Flange poses on the straight line from fk(q0) to p1, the yaw turning by yaw_deg."""
+    T0 = kin.fk(q0)
+    out = np.empty((n, 4, 4))
+    for i, u in enumerate(np.linspace(0.0, 1.0, n + 1)[1:]):
+        c, s = np.cos(np.radians(yaw_deg * u)), np.sin(np.radians(yaw_deg * u))
+        out[i] = T0
+        out[i, :3, :3] = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]]) @ T0[:3, :3]
+        out[i, :3, 3] = T0[:3, 3] + u * (np.asarray(p1) - T0[:3, 3])
+    return out
+
+
+@pytest.mark.parametrize("robot", ["cobra_s600", "pf400", "pf400 on a rail", "cartesian_gantry"])
+def test_ik_path_is_ik_pose_by_pose_each_seeded_by_the_last(robot):
+    """`ik_path` (the vectorised closed form of a SCARA's straight line) gives what `ik`
+    gives pose by pose, continuous, each seeded by the previous one: the same turn of the
+    multi-turn wrist across +/-180 deg, the same arm configuration, a rail held still."""
+    rail = LinearRail(direction=(0.0, 1.0, 0.0), lower=-0.5, upper=0.5, max_velocity=0.75, max_acceleration=1.0,
+                      axis_number=6) if robot.endswith("rail") else None
+    kin = RobotKinematics.from_mjcf(ROOT / "models" / "robots" / f"{robot.split()[0]}.xml", rail=rail)
+    rng = np.random.default_rng(3)
+    checked = 0
+    while checked < 20:
+        q0 = rng.uniform(kin.lower * 0.8 + kin.upper * 0.2, kin.lower * 0.2 + kin.upper * 0.8)
+        p1 = kin.fk(rng.uniform(kin.lower * 0.8 + kin.upper * 0.2, kin.lower * 0.2 + kin.upper * 0.8))[:3, 3]
+        poses = _line_poses(kin, q0, p1, rng.uniform(-400, 400), 40)
+        try:
+            expected, q = [], q0
+            for T in poses:
+                q = kin.ik(T, q, continuous=True)
+                expected.append(q)
+        except KinematicsError:
+            continue
+        assert np.allclose(kin.ik_path(poses, q0), expected, atol=1e-9, rtol=0)
+        checked += 1
+
+
+def test_ik_path_raises_the_error_of_the_first_pose_that_fails(kin):
+    """A line out of reach, or one taking a joint past its limit on the way, raises what
+    `ik` raises at the first such pose."""
+    q0 = kin.ik(_pose(0.4, 0.0, 0.3, 0), np.array([0, 1.0, 0, 0]), righty=True)
+    with pytest.raises(KinematicsError) as info:
+        kin.ik_path(_line_poses(kin, q0, [0.75, 0.0, 0.3], 0.0, 30), q0)
+    assert info.value.code == LOCATION_OUT_OF_RANGE
+    with pytest.raises(KinematicsError) as info:
+        kin.ik_path(_line_poses(kin, q0, [0.4, 0.0, 0.05], 0.0, 30), q0)  # below the J3 stroke
+    assert info.value.code == JOINT_LIMIT and info.value.joint == 3

@@ -53,7 +53,7 @@ def test_joint_move_limits_endpoints_and_analytic_time(kin):
         assert np.all(qd[0] == 0) and np.all(qd[-1] == 0)
         assert t[-1] == traj.duration
         analytic = joint_move_time(q0, q1, vmax, amax)
-        assert traj.duration == pytest.approx(analytic, rel=0.01)
+        assert traj.duration == pytest.approx(analytic, rel=0.002)  # the grid's cost: 0.11 % at most
         # time optimal: some joint uses its full acceleration
         assert np.max(np.abs(qdd) / amax) > 0.97
         shapes.add(bool(np.max(np.abs(qd) / vmax) > 0.99))  # cruise reached: trapezoid
@@ -70,7 +70,22 @@ def test_joint_move_slow_speed_scales_time(kin):
     slow = plan_joint_move(q0, q1, kin.max_velocity * 0.1, kin.max_acceleration)
     assert slow.duration > 3 * fast.duration
     assert slow.duration == pytest.approx(joint_move_time(q0, q1, kin.max_velocity * 0.1, kin.max_acceleration),
-                                          rel=0.01)
+                                          rel=0.002)
+
+
+@pytest.mark.parametrize("speed", [0.3, 0.05, 0.01])
+def test_slow_joint_moves_still_accelerate_at_the_limit(kin, speed):
+    """At a low speed the acceleration phase is a tiny part of the path: the grid still
+    resolves it, so the joints speed up as hard as at full speed (SPEED and DURATION
+    lower the speed, not the acceleration)."""
+    q0, q1 = np.array([0.0, 1.0, 0.0, 0.0]), np.array([1.0, 0.5, 0.1, 2.0])
+    vmax = kin.max_velocity * speed
+    traj = plan_joint_move(q0, q1, vmax, kin.max_acceleration)
+    t, _, qd = traj.sample(DT)
+    qdd = np.diff(qd, axis=0) / np.diff(t)[:, None]
+    assert np.all(np.abs(qd) <= vmax * 1.001) and np.all(np.abs(qdd) <= kin.max_acceleration * 1.001)
+    assert np.max(np.abs(qdd) / kin.max_acceleration) > 0.97
+    assert traj.duration == pytest.approx(joint_move_time(q0, q1, vmax, kin.max_acceleration), rel=0.002)
 
 
 def test_sample_times_include_the_end(kin):

@@ -13,6 +13,12 @@ kinematics and Jacobians come from pinocchio.  Inverse kinematics:
 * any other chain (e.g. a Cartesian X/Y/Z/theta gantry): damped least squares
   on the pinocchio model from the seed.
 
+A linear rail under the robot's base (`LinearRail`, from the scene) is an extra axis:
+the last joint of the joint vector, not part of the arm's chain.  Cartesian poses
+include it (the base frame is the robot's frame with the rail at 0), inverse
+kinematics keeps it where the seed has it (the arm alone reaches the pose), and its
+Jacobian column is zero: Cartesian motion never moves the rail, joint motion does.
+
 A robot with 4 joints controls x, y, z and the rotation about the vertical; the
 flange's orientation can only turn about the vertical from its home orientation
 (the Cobra's flange points down, the PF400's horizontally): a target tilted by
@@ -37,6 +43,7 @@ from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -49,6 +56,20 @@ STRAIGHT_LINE_CONFIG = -1022  # "*Straight-line motion can't alter configuration
 TILT_TOLERANCE = 1e-4  # rad: a 4-axis robot cannot tilt its tool
 POSITION_TOLERANCE = 1e-6  # m: IK must land this close
 LIMIT_EPS = 1e-9  # joint units: slack on the joint limits
+
+
+@dataclass(frozen=True)
+class LinearRail:
+    """A rail the robot's base rides on (SI units): its travel `direction` in the robot base
+    frame, its range, 100 % speed and acceleration, and its axis number in GPL."""
+
+    direction: tuple[float, float, float]
+    lower: float
+    upper: float
+    max_velocity: float
+    max_acceleration: float
+    axis_number: int
+    name: str = "rail"
 
 
 class KinematicsError(Exception):
@@ -151,6 +172,26 @@ class _Scara:
         """Angle from link 1 to link 2 (world, seen from above)."""
         return _wrap(self.beta - self.alpha1 + self.s2 * np.asarray(q2))
 
+    def closed_form(self, T: np.ndarray, righty: bool) -> tuple[np.ndarray, ...]:
+        """Closed-form IK of flange poses T (n x 4 x 4) in the arm configuration `righty`:
+        shoulder, elbow and slide joints, the yaw psi of J4's frame from its home
+        orientation, and the elbow cosine c (|c| > 1: out of reach), each an n-array.  The
+        shoulder and elbow are on their principal turn (see `RobotKinematics._scara_branches`)."""
+        T4 = T @ self.M4f_inv
+        P = T4[:, :3, 3]
+        Rrel = T4[:, :3, :3] @ self.R4.T
+        psi = np.arctan2(Rrel[:, 1, 0], Rrel[:, 0, 0])
+        dx, dy = P[:, 0] - self.p1[0], P[:, 1] - self.p1[1]
+        c = (dx * dx + dy * dy - self.l1 ** 2 - self.l2 ** 2) / (2 * self.l1 * self.l2)
+        gamma = np.arccos(np.clip(c, -1.0, 1.0))
+        if not righty:
+            gamma = -gamma
+        theta1 = np.arctan2(dy, dx) - np.arctan2(self.l2 * np.sin(gamma), self.l1 + self.l2 * np.cos(gamma))
+        q1 = self.s1 * (theta1 - self.alpha1)
+        q2 = self.s2 * (gamma - (self.beta - self.alpha1))
+        q3 = (P[:, 2] - self.z4) / self.a3
+        return q1, q2, q3, psi, c
+
     @staticmethod
     def valid(model: pin.Model) -> bool:
         return model.nq == 4 and model.nv == 4 and _joint_kinds(model) in SCARA_LAYOUTS
@@ -166,38 +207,56 @@ class RobotKinematics:
     """Kinematics of one robot (SI units, robot base frame)."""
 
     def __init__(self, model: pin.Model, flange_frame: str, max_velocity, max_acceleration, name: str = "",
-                 ready=None, payload_kg=None):
-        self.model = model
+                 ready=None, payload_kg=None, rail: LinearRail | None = None):
+        self.model = model  # the arm's chain (pinocchio); a rail is not in it
         self.data = model.createData()
         self.name = name
         if not model.existFrame(flange_frame):
             raise ValueError(f"no frame {flange_frame!r} in the model")
         self.frame_id = model.getFrameId(flange_frame)
+        n = self.arm_dof = model.nv
+        self.rail = rail
+        self.rail_direction = np.zeros(3) if rail is None else np.asarray(rail.direction, dtype=float)
         self.joint_names: list[str] = [model.names[i] for i in range(1, model.njoints)]
         self.lower = np.array(model.lowerPositionLimit, dtype=float)
         self.upper = np.array(model.upperPositionLimit, dtype=float)
         self.max_velocity = np.asarray(max_velocity, dtype=float)
         self.max_acceleration = np.asarray(max_acceleration, dtype=float)
-        # READY: the joints of the robot's READY location (V+ READY), the neutral pose unless given.
-        self.ready = np.clip(pin.neutral(model) if ready is None else np.asarray(ready, dtype=float),
-                             self.lower, self.upper)
-        self.payload_kg = None if payload_kg is None else tuple(float(v) for v in payload_kg)  # rated, maximum
-        if self.max_velocity.shape != (model.nv,) or self.max_acceleration.shape != (model.nv,):
-            raise ValueError("max_velocity/max_acceleration need one value per joint")
         self.revolute = np.array([model.joints[i].shortname().startswith(("JointModelR", "JointModelRevolute"))
                                   for i in range(1, model.njoints)])
+        # GPL axis numbers of the joints: 1 .. n for the arm, the rail's own (PreciseFlex: 6).
+        self.axis_numbers: tuple[int, ...] = tuple(range(1, n + 1))
+        neutral = pin.neutral(model)
+        if rail is not None:
+            self.joint_names.append(rail.name)
+            self.lower = np.append(self.lower, rail.lower)
+            self.upper = np.append(self.upper, rail.upper)
+            self.revolute = np.append(self.revolute, False)
+            self.axis_numbers += (rail.axis_number,)
+            neutral = np.append(neutral, 0.0)
+            if ready is not None and len(ready) == n:
+                ready = np.append(ready, 0.0)
+        # READY: the joints of the robot's READY location (V+ READY), the neutral pose unless given.
+        self.ready = np.clip(neutral if ready is None else np.asarray(ready, dtype=float), self.lower, self.upper)
+        self.payload_kg = None if payload_kg is None else tuple(float(v) for v in payload_kg)  # rated, maximum
+        if self.max_velocity.shape != (n,) or self.max_acceleration.shape != (n,):
+            raise ValueError("max_velocity/max_acceleration need one value per joint")
+        if rail is not None:
+            self.max_velocity = np.append(self.max_velocity, rail.max_velocity)
+            self.max_acceleration = np.append(self.max_acceleration, rail.max_acceleration)
         self.scara = _Scara(self) if _Scara.valid(model) else None
         # Task rows of the 6-D frame velocity (LOCAL_WORLD_ALIGNED): x, y, z, wz for 4 joints.
-        self._rows = np.array([0, 1, 2, 5]) if model.nv == 4 else np.arange(6)
-        q0 = pin.neutral(model)
-        self._home_rotation = self.fk(q0)[:3, :3].copy()
+        self._rows = np.array([0, 1, 2, 5]) if n == 4 else np.arange(6)
+        self._home_rotation = self._arm_fk(pin.neutral(model))[:3, :3].copy()
 
     @classmethod
-    def from_mjcf(cls, path: str | Path, flange_site: str = "flange") -> "RobotKinematics":
+    def from_mjcf(cls, path: str | Path, flange_site: str = "flange",
+                  rail: LinearRail | None = None) -> "RobotKinematics":
         """Pinocchio model from the MJCF (robot = first top-level body); joint speed and
         acceleration limits from the `<numeric>` entries `<model>/max_velocity` and
         `<model>/max_acceleration` (pinocchio does not read them); the READY joints from
-        `<model>/ready` and the rated and maximum payload (kg) from `<model>/payload`."""
+        `<model>/ready` and the rated and maximum payload (kg) from `<model>/payload`;
+        `rail`: the linear rail the scene mounts the robot on, if any."""
         path = Path(path)
         model = pin.buildModelFromMJCF(str(path))
         name, numeric = _read_numeric(path)
@@ -207,17 +266,31 @@ class RobotKinematics:
         except KeyError as missing:
             raise ValueError(f"{path}: no <numeric name={missing}> (joint limits for the planner)") from None
         return cls(model, flange_site, vmax, amax, name, ready=numeric.get(f"{name}/ready"),
-                   payload_kg=numeric.get(f"{name}/payload"))
+                   payload_kg=numeric.get(f"{name}/payload"), rail=rail)
 
     # ------------------------------------------------------------ forward
     @property
     def dof(self) -> int:
-        return self.model.nv
+        return len(self.lower)
+
+    def _arm_fk(self, q_arm: np.ndarray) -> np.ndarray:
+        pin.forwardKinematics(self.model, self.data, np.asarray(q_arm, dtype=float))
+        return pin.updateFramePlacement(self.model, self.data, self.frame_id).homogeneous
+
+    def rail_offset(self, q: np.ndarray) -> np.ndarray:
+        """Where the rail has carried the arm (m, base frame) at joints q; zero without a rail."""
+        if self.rail is None:
+            return np.zeros(3)
+        return self.rail_direction * float(q[self.arm_dof])
 
     def fk(self, q: np.ndarray) -> np.ndarray:
         """4x4 flange pose in the robot base frame, translation in metres."""
-        pin.forwardKinematics(self.model, self.data, np.asarray(q, dtype=float))
-        return pin.updateFramePlacement(self.model, self.data, self.frame_id).homogeneous
+        q = np.asarray(q, dtype=float)
+        T = self._arm_fk(q[: self.arm_dof])
+        if self.rail is not None:
+            T = T.copy()
+            T[:3, 3] += self.rail_offset(q)
+        return T
 
     def fk_positions(self, Q: np.ndarray) -> np.ndarray:
         """Flange positions (n x 3, m) for joint vectors Q (n x dof); vectorised for a SCARA."""
@@ -236,19 +309,26 @@ class RobotKinematics:
         out[:, 0] = s.p1[0] + s.l1 * np.cos(t1) + s.l2 * np.cos(t2) + c * r[0] - si * r[1]
         out[:, 1] = s.p1[1] + s.l1 * np.sin(t1) + s.l2 * np.sin(t2) + si * r[0] + c * r[1]
         out[:, 2] = s.z4 + s.a3 * q3 + r[2]
+        if self.rail is not None:
+            out += np.outer(Q[:, self.arm_dof], self.rail_direction)
         return out
 
     def jacobian(self, q: np.ndarray) -> np.ndarray:
         """6 x dof Jacobian of the flange: rows vx, vy, vz (flange origin) and wx, wy, wz,
-        all in the base frame axes (pinocchio LOCAL_WORLD_ALIGNED)."""
+        all in the base frame axes (pinocchio LOCAL_WORLD_ALIGNED).  A rail's column is
+        zero: what solves Cartesian velocities with it leaves the rail still."""
         q = np.asarray(q, dtype=float)
-        return pin.computeFrameJacobian(self.model, self.data, q, self.frame_id,
-                                        pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        J = pin.computeFrameJacobian(self.model, self.data, q[: self.arm_dof], self.frame_id,
+                                     pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        if self.rail is not None:
+            J = np.hstack([J, np.zeros((6, 1))])
+        return J
 
     def is_righty(self, q: np.ndarray) -> bool:
         """SCARA arm configuration: RIGHTY when the elbow turns link 2 counter-clockwise
-        from link 1 seen from above (for the Cobra model: J2 > 0, for the PF400: J3 > 0; the
-        stretched arm counts as RIGHTY).  Robots without an elbow configuration report True."""
+        from link 1 seen from above (for the Cobra model: J2 > 0, for the PF400: J3 below
+        180 deg; the stretched arm counts as RIGHTY).  Robots without an elbow
+        configuration report True."""
         if self.scara is None:
             return True
         return bool(self.scara.elbow(q[self.scara.elbow_joint]) >= 0.0)
@@ -282,43 +362,86 @@ class RobotKinematics:
         q_seed = np.asarray(q_seed, dtype=float)
         if not self._tilt_ok(T[:3, :3]):
             raise KinematicsError.out_of_range("tool not vertical")
+        n = self.arm_dof
+        if self.rail is not None:  # the arm reaches the pose from where the rail is
+            T = T.copy()
+            T[:3, 3] -= self.rail_offset(q_seed)
         if self.scara is not None:
             q = self._scara_ik(T, q_seed, self.is_righty(q_seed) if righty is None else righty, continuous)
         else:
-            q = q_seed.copy()
+            q = q_seed[:n].copy()
         q = self._refine(T, q)
-        if single and self.revolute[-1]:
-            q[-1] = float(_wrap(q[-1]))
+        if single and self.revolute[n - 1]:
+            q[n - 1] = float(_wrap(q[n - 1]))
+        q = np.concatenate([q, q_seed[n:]])
         self.check_limits(q)
         return q
 
+    def ik_path(self, Ts: np.ndarray, q_seed: np.ndarray, righty: bool | None = None) -> np.ndarray:
+        """Joint vectors (n x dof) for the flange poses `Ts` (n x 4 x 4) of a continuous motion:
+        row i is `ik(Ts[i], row i - 1, righty, continuous=True)`, row -1 being `q_seed`.
+
+        For a SCARA the closed form runs on all the poses at once (numpy), each multi-turn
+        joint on the branch nearest the previous pose, and the result is checked with the
+        vectorised forward kinematics.  A pose that is out of reach, past a joint limit or
+        not landed on within `_refine`'s tolerance sends the whole path through `ik` one
+        pose at a time, which raises that pose's error as a single `ik` would."""
+        Ts = np.asarray(Ts, dtype=float)
+        q_seed = np.asarray(q_seed, dtype=float)
+        if self.scara is not None and len(Ts):
+            Q = self._scara_ik_path(Ts, q_seed, self.is_righty(q_seed) if righty is None else righty)
+            if Q is not None:
+                return Q
+        out = np.empty((len(Ts), self.dof))
+        q = q_seed
+        for i, T in enumerate(Ts):
+            q = out[i] = self.ik(T, q, righty=righty, continuous=True)
+        return out
+
+    def _scara_ik_path(self, Ts: np.ndarray, seed: np.ndarray, righty: bool) -> np.ndarray | None:
+        """`ik_path` for a SCARA; None when a pose needs `ik`'s own handling."""
+        s = self.scara
+        tilt_ok = Ts[:, 2, :3] @ self._home_rotation[2, :] >= math.cos(TILT_TOLERANCE)
+        arm = Ts.copy()
+        arm[:, :3, 3] -= self.rail_offset(seed)  # the arm reaches the poses from where the rail is
+        raw1, raw2, q3, psi, c = s.closed_form(arm, righty)
+        if not (np.all(tilt_ok) and np.all(np.abs(c) <= 1 + 1e-12)):
+            return None
+        Q = np.empty((len(Ts), self.dof))
+        Q[:, self.arm_dof:] = seed[self.arm_dof:]  # a rail stays where it is
+        Q[:, s.slide] = q3
+        q1, q4 = float(seed[s.shoulder]), float(seed[s.wrist])
+        for k, pose in enumerate(zip(raw1.tolist(), raw2.tolist(), psi.tolist())):
+            q1, q2, q4 = self._scara_branches(*pose, q1, q4, within=False)
+            Q[k, s.shoulder], Q[k, s.elbow_joint], Q[k, s.wrist] = q1, q2, q4
+        if np.any(Q < self.lower - LIMIT_EPS) or np.any(Q > self.upper + LIMIT_EPS):
+            return None
+        # The closed form is exact for a model `_Scara.valid` accepts (about 1e-15 m on the
+        # Cobra and the PF400); `_refine` would stop at once.  J4 is built from the yaw.
+        if not np.all(np.abs(self.fk_positions(Q) - Ts[:, :3, 3]) < 1e-10):
+            return None
+        return Q
+
+    def _scara_branches(self, q1, q2, psi, seed1, seed4, within: bool) -> tuple[float, float, float]:
+        """Shoulder, elbow and wrist of one closed-form solution: the shoulder and the wrist
+        on the turn nearest the seed's (within the limits with `within`), the elbow (not
+        multi-turn) nearest zero within its limits."""
+        s = self.scara
+        lo, hi = self.lower, self.upper
+        i1, i2, i4 = s.shoulder, s.elbow_joint, s.wrist
+        q1 = _branch_nearest(q1, seed1, lo[i1], hi[i1], within)
+        q2 = _branch_nearest(q2, 0.0, lo[i2], hi[i2], True)
+        q4 = _branch_nearest(s.s4 * (psi - s.s1 * q1 - s.s2 * q2), seed4, lo[i4], hi[i4], within)
+        return q1, q2, q4
+
     def _scara_ik(self, T, seed, righty: bool, continuous: bool) -> np.ndarray:
         s = self.scara
-        T4 = T @ s.M4f_inv
-        P = T4[:3, 3]
-        Rrel = T4[:3, :3] @ s.R4.T
-        psi = math.atan2(Rrel[1, 0], Rrel[0, 0])
-        dx, dy = P[0] - s.p1[0], P[1] - s.p1[1]
-        r2 = dx * dx + dy * dy
-        c = (r2 - s.l1 ** 2 - s.l2 ** 2) / (2 * s.l1 * s.l2)
+        q1, q2, q3, psi, c = (float(v[0]) for v in s.closed_form(T[None], righty))
         if c > 1 + 1e-12:
             raise KinematicsError.out_of_range("beyond the reach of the arm")
         if c < -1 - 1e-12:
             raise KinematicsError.out_of_range("too close to the J1 axis")
-        gamma = math.acos(min(1.0, max(-1.0, c)))
-        if not righty:
-            gamma = -gamma
-        theta1 = math.atan2(dy, dx) - math.atan2(s.l2 * math.sin(gamma), s.l1 + s.l2 * math.cos(gamma))
-        q1 = s.s1 * (theta1 - s.alpha1)
-        q2 = s.s2 * (gamma - (s.beta - s.alpha1))
-        q3 = (P[2] - s.z4) / s.a3
-        lo, hi = self.lower, self.upper
-        within = not continuous
-        i1, i2, i4 = s.shoulder, s.elbow_joint, s.wrist
-        q1 = _branch_nearest(q1, seed[i1], lo[i1], hi[i1], within)
-        q2 = _branch_nearest(q2, 0.0, lo[i2], hi[i2], True)  # the elbow angle is not multi-turn
-        q4 = s.s4 * (psi - s.s1 * q1 - s.s2 * q2)
-        q4 = _branch_nearest(q4, seed[i4], lo[i4], hi[i4], within)
+        q1, q2, q4 = self._scara_branches(q1, q2, psi, seed[s.shoulder], seed[s.wrist], within=not continuous)
         return s.joints(q1, q2, q3, q4)
 
     def _task_error(self, T: np.ndarray, M: pin.SE3) -> np.ndarray:
@@ -342,7 +465,7 @@ class RobotKinematics:
             dq = J.T @ np.linalg.solve(J @ J.T + lam * np.eye(len(e)), e)
             q = q + dq
             if self.scara is None:
-                q = np.clip(q, self.lower, self.upper)
+                q = np.clip(q, self.lower[: self.arm_dof], self.upper[: self.arm_dof])
         pin.forwardKinematics(model, data, q)
         M = pin.updateFramePlacement(model, data, fid)
         if np.linalg.norm(T[:3, 3] - M.translation) > POSITION_TOLERANCE:

@@ -2,7 +2,7 @@
 
 All toppra use lives in this module (its README warns Python support may go).
 A path is a cubic spline through joint waypoints, parametrised by s in [0, 1];
-toppra (Seidel solver, `N_GRID` grid points, constant-acceleration
+toppra (Seidel solver, `N_GRID_*` grid points, constant-acceleration
 parametrizer) gives the time-optimal s(t) within the joint velocity and
 acceleration limits.  `Trajectory` keeps only numpy/scipy data: the
 piecewise-constant path acceleration that `ParametrizeConstAccel` uses, and the
@@ -31,9 +31,16 @@ import pinocchio as pin
 from .kinematics import STRAIGHT_LINE_CONFIG, KinematicsError, RobotKinematics
 
 if TYPE_CHECKING:
-    from scipy.interpolate import CubicSpline
+    from scipy.interpolate import PPoly
 
-N_GRID = 100  # toppra grid points
+# toppra grid points (cosine spacing, see `_grid`), each costing about 10 us of toppra's
+# Python loop, chosen by measurement against a 400-point grid over 200 random Cobra
+# motions (`bench/planning.py --grid-error`, docs/performance.md): every motion within
+# 0.5 % of its duration there.
+N_GRID_JOINT = 8  # joint-space line, refined once at the profile's corners: at most 0.13 % longer
+REFINE_CELLS = 4  # that refinement: each cell at a corner cut into this many
+END_FRACTIONS = np.array([1e-4, 1e-3, 5e-3])  # grid points this near either end, see `_grid`
+N_GRID_STRAIGHT = 80  # straight line: at most 0.33 % longer, 0.08 % on average
 LINE_TOLERANCE = 0.05e-3  # m: target deviation of a straight-line motion (the contract is 0.1 mm)
 WAYPOINT_SPACING = 0.010  # m: first try of the straight-line waypoint spacing
 WAYPOINT_ANGLE = math.radians(5.0)  # rad: same, for the orientation
@@ -55,8 +62,8 @@ class Trajectory:
     _s: np.ndarray = field(repr=False)  # path parameter at the knots
     _v: np.ndarray = field(repr=False)  # ds/dt at the knots
     _a: np.ndarray = field(repr=False)  # d2s/dt2 on each segment (m), constant
-    _path: CubicSpline | None = field(default=None, repr=False)  # s -> q
-    _dpath: CubicSpline | None = field(default=None, repr=False)  # s -> dq/ds
+    _path: PPoly | _Line | None = field(default=None, repr=False)  # s -> q
+    _dpath: PPoly | _Line | None = field(default=None, repr=False)  # s -> dq/ds
 
     @classmethod
     def still(cls, q: np.ndarray) -> "Trajectory":
@@ -97,14 +104,10 @@ class Trajectory:
         return q[0], qd[0]
 
     # ------------------------------------------------------------ phases
-    def _phases(self) -> tuple[np.ndarray, np.ndarray]:
-        """Knot times and the sign of the path acceleration (+1, 0, -1) on each segment that
-        lasts (grid points toppra places a hair apart give segments of no duration and
-        meaningless accelerations: they are left out)."""
-        keep = np.diff(self._t) > 1e-7
-        a = self._a[keep]
-        tol = PHASE_TOLERANCE * float(np.max(np.abs(a), initial=0.0))
-        sign = np.where(a > tol, 1, np.where(a < -tol, -1, 0))
+    def _phases(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Start, length and sign of the path acceleration of each segment that lasts
+        (see `_accel_signs`)."""
+        keep, sign = _accel_signs(self._t, self._a)
         return self._t[:-1][keep], np.diff(self._t)[keep], sign
 
     @property
@@ -142,17 +145,22 @@ class Trajectory:
 # ---------------------------------------------------------------- toppra
 @functools.cache
 def _libs() -> SimpleNamespace:
-    """toppra and scipy's CubicSpline, imported by the first plan: with the scipy and
+    """toppra and scipy's PPoly, imported by the first plan: with the scipy and
     matplotlib modules toppra pulls in they are most of the package's import time, which a
     run that never moves the robot (or a `twin check`) need not pay."""
     import toppra
     import toppra.algorithm
     import toppra.constraint
-    from scipy.interpolate import CubicSpline
+    import toppra.solverwrapper
+    from scipy.interpolate import PPoly
 
     toppra.setup_logging("WARNING")
-    return SimpleNamespace(toppra=toppra, algorithm=toppra.algorithm, constraint=toppra.constraint,
-                           CubicSpline=CubicSpline)
+    # Every toppra instance asks which optional solver packages are installed, searching
+    # sys.path for each (a tenth of a MOVE's planning, more on a busy disk); the answer
+    # cannot change while the process runs, so it is asked once.
+    if not hasattr(toppra.solverwrapper.available_solvers, "cache_info"):
+        toppra.solverwrapper.available_solvers = functools.cache(toppra.solverwrapper.available_solvers)
+    return SimpleNamespace(toppra=toppra, algorithm=toppra.algorithm, constraint=toppra.constraint, PPoly=PPoly)
 
 
 @functools.lru_cache(maxsize=512)
@@ -181,49 +189,94 @@ def accel_bounds(dq: np.ndarray, amax: np.ndarray, accel: float = 1.0, decel: fl
     return np.column_stack([-down, up])
 
 
-def _parametrize(ss: np.ndarray, waypoints: np.ndarray, vmax: np.ndarray, abounds: np.ndarray):
-    """Time-optimal rest-to-rest s(t) along the spline through `waypoints`: (t, s, v, a).
-    `abounds` is (dof, 2): lower and upper joint acceleration."""
-    libs = _libs()
-    path = libs.toppra.SplineInterpolator(ss, waypoints)
-    vel, acc = _constraints(tuple(map(float, vmax)), tuple(map(tuple, np.asarray(abounds, float).tolist())))
-    # Grid points closer together near both ends, where a motion speeds up and slows down:
-    # a short acceleration phase spread over a few uniform cells comes out slow.
-    grid = ss[0] + (ss[-1] - ss[0]) * 0.5 * (1.0 - np.cos(np.linspace(0.0, math.pi, N_GRID)))
-    if len(ss) > 2:  # also put grid points on the waypoints, where the spline's curvature changes
-        grid = np.sort(np.concatenate([grid, ss]))
-        grid = grid[np.concatenate([[True], np.diff(grid) > 1e-9])]  # no cells of zero length
-    instance = libs.algorithm.TOPPRA([vel, acc], path, gridpoints=grid, solver_wrapper="seidel",
-                           parametrizer="ParametrizeConstAccel")
-    out = instance.compute_trajectory(0.0, 0.0)
+def _grid(n: int) -> np.ndarray:
+    """toppra grid on the path parameter's [0, 1]: `n` points closer together near both
+    ends, where a motion speeds up and slows down (a short acceleration phase spread over
+    a few uniform cells comes out slow), and `END_FRACTIONS` of the way from either end
+    (the acceleration phase of a slow motion, DURATION or a low SPEED, is that short:
+    inside a single cell it would be spread over the whole cell, at less than the allowed
+    acceleration).  A straight line's waypoints need no grid points of their own (the
+    durations do not change)."""
+    u = np.concatenate([0.5 * (1.0 - np.cos(np.linspace(0.0, math.pi, n))), END_FRACTIONS, 1.0 - END_FRACTIONS])
+    return np.unique(u)
+
+
+def _accel_signs(t: np.ndarray, a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Which segments of a toppra profile last (grid points toppra places a hair apart give
+    segments of no duration and meaningless accelerations), and the sign of the path
+    acceleration (+1, 0, -1) on each of those."""
+    keep = np.diff(t) > 1e-7
+    kept = a[keep]
+    tol = PHASE_TOLERANCE * float(np.max(np.abs(kept), initial=0.0))
+    return keep, np.where(kept > tol, 1, np.where(kept < -tol, -1, 0))
+
+
+def _solve(path, grid: np.ndarray, vel, acc):
+    out = _libs().algorithm.TOPPRA([vel, acc], path, gridpoints=grid, solver_wrapper="seidel",
+                                   parametrizer="ParametrizeConstAccel").compute_trajectory(0.0, 0.0)
     if out is None:
         raise KinematicsError.out_of_range("no feasible time parametrisation")
     return out._ts, out._ss, out._velocities, out._us
 
 
-def _trajectory(ss, waypoints_q, waypoints_all, vmax, abounds) -> Trajectory:
-    t, s, v, a = _parametrize(ss, waypoints_all, vmax, abounds)
-    path = _libs().CubicSpline(ss, waypoints_q) if len(ss) > 2 else _Line(waypoints_q[0], waypoints_q[-1])
-    dpath = path.derivative()
-    q0, q1 = np.array(waypoints_q[0], dtype=float), np.array(waypoints_q[-1], dtype=float)
-    return Trajectory(float(t[-1]), q0, q1, np.asarray(t, float), np.asarray(s, float), np.asarray(v, float),
-                      np.asarray(a, float), path, dpath)
+def _parametrize(path, grid: np.ndarray, vmax: np.ndarray, abounds: np.ndarray, refine: bool = False):
+    """Time-optimal rest-to-rest s(t) along the toppra `path`: (t, s, v, a).  `abounds` is
+    (dof, 2): lower and upper joint acceleration.
+
+    With `refine`, a second toppra pass on `grid` with the cells on either side of each
+    change of the path acceleration's sign (where speeding up, cruising and slowing down
+    meet) cut into `REFINE_CELLS`: on a joint-space line (constant limits along the path)
+    the profile's corners fall inside cells, and a coarse cell around a corner is all that
+    makes the motion slower than the time-optimal one."""
+    vel, acc = _constraints(tuple(map(float, vmax)), tuple(map(tuple, np.asarray(abounds, float).tolist())))
+    t, s, v, a = _solve(path, grid, vel, acc)
+    if not refine:
+        return t, s, v, a
+    keep, sign = _accel_signs(t, a)
+    cells = np.flatnonzero(keep)
+    corners = np.flatnonzero(np.diff(sign) != 0)
+    cut = np.unique(np.concatenate([cells[corners], cells[corners + 1]]))
+    if not len(cut):
+        return t, s, v, a
+    pieces = np.linspace(0.0, 1.0, REFINE_CELLS + 1)[1:-1]
+    inside = (grid[cut, None] + (grid[cut + 1] - grid[cut])[:, None] * pieces).ravel()
+    return _solve(path, np.sort(np.concatenate([grid, inside])), vel, acc)
+
+
+def _trajectory(timing, q_path, q0: np.ndarray, q1: np.ndarray) -> Trajectory:
+    """A Trajectory from toppra's (t, s, v, a) and the joint path s -> q."""
+    t, s, v, a = (np.asarray(x, float) for x in timing)
+    return Trajectory(float(t[-1]), np.array(q0, dtype=float), np.array(q1, dtype=float), t, s, v, a,
+                      q_path, q_path.derivative())
 
 
 class _Line:
-    """q0 + s (q1 - q0), s in [0, 1], with the CubicSpline calling interface."""
+    """The joint-space line q0 + s (q1 - q0), s in [0, 1], or its `order`-th derivative:
+    a geometric path for toppra (the interface of toppra's AbstractGeometricPath:
+    `path(s, order)`, `dof`, `path_interval`; toppra's SplineInterpolator through the two
+    end points is the same line, and building it was a sixth of a MOVE's planning) and
+    for sampling (scipy's PPoly interface: `path(s)`, `path.derivative()`)."""
 
-    def __init__(self, q0, q1, derivative: bool = False):
-        self.q0, self.dq, self.d = np.asarray(q0, float), np.asarray(q1, float) - np.asarray(q0, float), derivative
+    path_interval = np.array([0.0, 1.0])
 
-    def __call__(self, s):
+    def __init__(self, q0, q1, order: int = 0):
+        self.q0 = np.asarray(q0, float)
+        self.dq = np.asarray(q1, float) - self.q0
+        self.order = order
+
+    @property
+    def dof(self) -> int:
+        return len(self.q0)
+
+    def __call__(self, s, order: int = 0) -> np.ndarray:
         s = np.asarray(s, dtype=float)
-        if self.d:
-            return np.broadcast_to(self.dq, s.shape + self.dq.shape).copy()
-        return self.q0 + s[..., None] * self.dq
+        order += self.order
+        if order == 0:
+            return self.q0 + s[..., None] * self.dq
+        return np.broadcast_to(self.dq if order == 1 else np.zeros_like(self.dq), s.shape + self.dq.shape).copy()
 
-    def derivative(self):
-        return _Line(self.q0, self.q0 + self.dq, derivative=True)
+    def derivative(self) -> "_Line":
+        return _Line(self.q0, self.q0 + self.dq, self.order + 1)
 
 
 # ---------------------------------------------------------------- analytic check
@@ -253,9 +306,10 @@ def plan_joint_move(q0, q1, vmax, amax, accel: float = 1.0, decel: float = 1.0) 
         return Trajectory.still(q0)
     vmax = np.asarray(vmax, float)
     amax = np.asarray(amax, float)
-    ss = np.array([0.0, 1.0])
-    W = np.vstack([q0, q1])
-    return _trajectory(ss, W, W, vmax, accel_bounds(q1 - q0, amax, accel, decel))
+    path = _Line(q0, q1)
+    timing = _parametrize(path, _grid(N_GRID_JOINT), vmax,
+                          accel_bounds(q1 - q0, amax, accel, decel), refine=True)
+    return _trajectory(timing, path, q0, q1)
 
 
 def _segment_clear_of_hole(kin: RobotKinematics, P0: np.ndarray, P1: np.ndarray, righty: bool) -> None:
@@ -264,9 +318,14 @@ def _segment_clear_of_hole(kin: RobotKinematics, P0: np.ndarray, P1: np.ndarray,
     not cross that disc (its end points can both lie outside it)."""
     s = kin.scara
     elbow = s.elbow_joint
-    g = sorted(float(s.beta - s.alpha1 + s.s2 * lim) for lim in (kin.lower[elbow], kin.upper[elbow]))
-    g = [min(max(v, 0.0), math.pi) for v in g] if righty else [min(max(v, -math.pi), 0.0) for v in g]
-    fold = min(math.pi, max(abs(v) for v in g))
+    # The elbow angles the joint range allows in this configuration (a range may hold
+    # the folded arm, as the PF400's J3 does, 12 to 348 deg): the most folded one.
+    g = s.elbow(np.linspace(kin.lower[elbow], kin.upper[elbow], 721))
+    if np.any(np.abs(np.diff(g)) > math.pi):  # the wrapped angle jumps: the range passes the fold
+        fold = math.pi
+    else:
+        g = g[g >= 0.0] if righty else -g[g < 0.0]
+        fold = float(g.max()) if len(g) else 0.0
     r_min = math.sqrt(max(s.l1 ** 2 + s.l2 ** 2 + 2 * s.l1 * s.l2 * math.cos(fold), 0.0))
     a, b = P0[:2] - s.p1, P1[:2] - s.p1
     d = b - a
@@ -319,7 +378,7 @@ def plan_straight_move(kin: RobotKinematics, q0, T1, vmax, amax, cart_speed_max,
     R0 = T0[:3, :3].copy()
     length = float(np.linalg.norm(p1 - p0))
     rotvec = pin.log3(R0.T @ T1[:3, :3])
-    if kin.dof == 4:  # only the rotation about the vertical can be followed; a tilt is an error in ik
+    if kin.arm_dof == 4:  # only the rotation about the vertical can be followed; a tilt is an error in ik
         rotvec = np.array([0.0, 0.0, rotvec[2]]) if kin._tilt_ok(T1[:3, :3] @ untool[:3, :3]) else rotvec
     angle = float(np.linalg.norm(rotvec))
     # The end point first: an unreachable target is reported as such.
@@ -328,30 +387,35 @@ def plan_straight_move(kin: RobotKinematics, q0, T1, vmax, amax, cart_speed_max,
         return Trajectory.still(q0)
     if kin.scara is not None:
         s = kin.scara
-        _segment_clear_of_hole(kin, (T0 @ untool @ s.M4f_inv)[:3, 3], (T1 @ untool @ s.M4f_inv)[:3, 3], config)
+        rail = kin.rail_offset(q0)  # the line is the arm's, from where the rail holds it
+        _segment_clear_of_hole(kin, (T0 @ untool @ s.M4f_inv)[:3, 3] - rail, (T1 @ untool @ s.M4f_inv)[:3, 3] - rail,
+                               config)
 
     n = max(2, int(math.ceil(length / WAYPOINT_SPACING)), int(math.ceil(angle / WAYPOINT_ANGLE))) + 1
+    spline = _libs().toppra.SplineInterpolator
     for attempt in range(MAX_REFINEMENTS + 1):
         ss = np.linspace(0.0, 1.0, n)
-        Q = np.empty((n, kin.dof))
-        Q[0] = q0
-        T = np.eye(4)
-        for i in range(1, n):
-            T[:3, :3] = R0 @ pin.exp3(ss[i] * rotvec)
-            T[:3, 3] = p0 + ss[i] * (p1 - p0)
-            Q[i] = kin.ik((T1 if i == n - 1 else T) @ untool, Q[i - 1], righty=config, continuous=True)
+        T = np.empty((n - 1, 4, 4))
+        T[:] = np.eye(4)
+        T[:, :3, :3] = R0 @ np.array([pin.exp3(u * rotvec) for u in ss[1:]])
+        T[:, :3, 3] = p0 + ss[1:, None] * (p1 - p0)
+        T[-1] = T1
+        Q = np.vstack([q0, kin.ik_path(T @ untool, q0, righty=config)])
+        # Extra path coordinate: distance travelled (m), limited to cart_speed_max.
+        W = np.column_stack([Q, length * ss])
+        path = spline(ss, W)
         # Deviation of the spline's tip path from the line, between the waypoints.
-        spline = _libs().CubicSpline(ss, Q)
         probe = np.concatenate([(ss[:-1] + ss[1:]) / 2, ss[:-1] + (ss[1:] - ss[:-1]) / 4,
                                 ss[:-1] + 3 * (ss[1:] - ss[:-1]) / 4])
-        deviation = float(np.max(_distance_to_segment(_tip_positions(kin, spline(probe), tool), p0, p1)))
+        deviation = float(np.max(_distance_to_segment(_tip_positions(kin, path(probe)[:, :kin.dof], tool), p0, p1)))
         if deviation <= LINE_TOLERANCE:
             break
         n = 2 * n - 1
     else:
         raise KinematicsError.out_of_range(f"straight line not followed (deviation {deviation * 1e3:.3f} mm)")
-    # Extra path coordinate: distance travelled (m), limited to cart_speed_max.
-    W = np.column_stack([Q, length * ss])
     v_all = np.append(vmax, cart_speed_max if length > 0 else 1.0)
     a_all = np.append(amax, CART_ACCEL_UNLIMITED)
-    return _trajectory(ss, Q, W, v_all, accel_bounds(W[-1] - W[0], a_all, accel, decel))
+    timing = _parametrize(path, _grid(N_GRID_STRAIGHT), v_all, accel_bounds(W[-1] - W[0], a_all, accel, decel))
+    # The joint columns of the same spline (its coefficients, not a second fit).
+    q_path = _libs().PPoly.construct_fast(path.cspl.c[..., :kin.dof], path.cspl.x)
+    return _trajectory(timing, q_path, q0, Q[-1])

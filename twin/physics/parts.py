@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import numpy as np
 import mujoco
-import trimesh
 
 from .components.base import FINISHED, LIVE, PARKED, RETIRED, CellContext, Component
 from .geometry import MM
@@ -85,6 +84,8 @@ class PartPool(Component):
         half_z = []
         for k, (name, t) in enumerate(self.types.items()):
             if t.shape == "mesh":
+                import trimesh  # here: a third of the package's import time, for mesh parts only
+
                 mesh = trimesh.load(str(resolve(t.mesh, ctx.scene_path, f"part[{k}].mesh")), force="mesh")
                 v = np.asarray(mesh.vertices, dtype=float) / MM
                 v -= (v.min(axis=0) + v.max(axis=0)) / 2  # origin at the bounding box centre

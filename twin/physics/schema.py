@@ -70,10 +70,33 @@ class Controller(Section):
     no_progress_s: NonNegative | None = None  # the watchdog's no-progress limit, 0: none (docs/robustness.md)
 
 
+class Rail(Section):
+    """A linear rail under the robot's base (docs/clients.md); defaults: the PreciseFlex
+    PF400's 1 m rail as its controller configures it (GPL axis 6)."""
+    direction: Vec3 = [1.0, 0.0, 0.0]     # travel direction in the robot base frame
+    travel: Vec2 = [-500.0, 500.0]        # mm: the rail joint's range; 0 puts the base at robot.base
+    speed: Positive = 750.0               # mm/s at 100 %
+    acceleration: Positive = 1000.0       # mm/s2 at 100 %
+    gpl_axis: Annotated[int, Field(ge=1, le=12)] = 6
+
+    @field_validator("direction")
+    @classmethod
+    def _direction(cls, v: list[float]) -> list[float]:
+        return _nonzero(v)
+
+    @field_validator("travel")
+    @classmethod
+    def _travel(cls, v: list[float]) -> list[float]:
+        if not v[0] <= 0.0 <= v[1] or v[0] == v[1]:
+            raise ValueError("travel: [lowest, highest] mm, lowest below highest, 0 (the base pose) within")
+        return v
+
+
 class Robot(Section):
     model: str
     base: Pose6 = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
     home: str = "start"
+    rail: Rail | None = None
 
 
 class Gripper(Section):

@@ -315,6 +315,15 @@ class IoStatement(Statement):
 
 
 @dataclass
+class MonitorCommand(Statement):
+    """An "MC" line of a command program that is not also a program instruction:
+    MC LOAD file, MC ZERO ... (`command` upper case, `text` the whole command)."""
+
+    command: str
+    text: str
+
+
+@dataclass
 class KeyedAssign(Statement):
     """An instruction that assigns what it names: BITS 1, 8 = 255,
     DECOMPOSE parts[] = loc, SWITCH CP = SIG(1001), TIMER 1 = 0.

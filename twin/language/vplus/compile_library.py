@@ -17,6 +17,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 
 from . import ast
 from . import messages as msg
@@ -131,16 +132,27 @@ class LibraryStatements:
         """Wait before a simple statement, or before a condition (IF, WHILE,
         UNTIL, CASE, IF ... GOTO) is evaluated, for the GETCs in it."""
         for call in _calls(node, "GETC"):
+            # The mode is bit flags: 1 no-wait, 2 no echo (v17 L7224-7225,
+            # L7530-7533); GETC(lun, 2) waits, as the ROS-Industrial driver's does.
             mode = call.args[1] if len(call.args) > 1 else None
-            if call.args and call.args[0] is not None and (mode is None or (isinstance(mode, ast.Num) and mode.value == 0)):
-                self.emit(depth, f"yield from rt.system.devices.wait_for_byte(rt, {self.expr(call.args[0])})")
+            if not call.args or call.args[0] is None:
+                continue
+            wait = f"yield from rt.system.devices.wait_for_byte(rt, {self.expr(call.args[0])})"
+            if mode is None or (isinstance(mode, ast.Num) and not math.floor(mode.value + 0.5) & 1):
+                self.emit(depth, wait)
+            elif not isinstance(mode, ast.Num):
+                self.emit(depth, f"if not _ix({self.checked(mode, '_real', 'GETC')}) & 1:")
+                self.emit(depth + 1, wait)
 
     # ----------------------------------------------------------- references
     def peek(self, var: ast.Var) -> str:
-        """The variable's value, or None while it is undefined."""
-        if var.indices:
-            return self.expr(var)
+        """The variable's (or array element's) value, or None while it is undefined."""
         key = self.key(var)
+        if var.indices:
+            if key in self.scope.auto:
+                return f"{self.pyname(var)}.get({self.index(var.indices)})"
+            table = "L" if key in self.scope.local else "G"
+            return f"_element_or_none({table}, {key!r}, {self.index(var.indices)})"
         if key in self.scope.auto:
             return f"locals().get({self.pyname(var)!r})"
         return f"{'L' if key in self.scope.local else 'G'}.get({key!r})"

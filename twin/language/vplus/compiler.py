@@ -476,6 +476,8 @@ class ProgramCompiler(LibraryStatements):
         var = e.args[0]
         key = self.key(var)
         if key in self.scope.auto:
+            if var.indices:  # the AUTO array exists from its declaration; is the element set?
+                return f"(-1.0 if {self.index(var.indices)} in {self.pyname(var)} else 0.0)"
             return f"(-1.0 if {self.pyname(var)!r} in locals() else 0.0)"
         table = "L" if key in self.scope.local else "G"
         if var.indices:
@@ -849,8 +851,8 @@ class ProgramCompiler(LibraryStatements):
     def s_CallProgram(self, s: ast.CallProgram, depth: int) -> None:
         # A variable passed by reference may still be undefined: the callee
         # sees an undefined parameter (DEFINED() is false) and may define it.
-        args = ", ".join("None" if a is None else self.peek(a) if self.by_reference(a) and not a.indices
-                         else self.expr(a) for a in s.args)
+        args = ", ".join("None" if a is None else self.peek(a) if self.by_reference(a) else self.expr(a)
+                         for a in s.args)
         if s.name is not None:
             target = repr(s.name)
         else:
@@ -995,6 +997,9 @@ class ProgramCompiler(LibraryStatements):
         signal = self.expr(s.args[0]) if s.args[0] is not None else "None"
         self.emit(depth, f"rt.react({signal}, {name!r}, [{self.arguments(args)}], {priority}, "
                          f"immediate={s.name == 'REACTI'})")
+
+    def s_MonitorCommand(self, s: ast.MonitorCommand, depth: int) -> None:
+        self.emit(depth, f"rt.monitor_command({s.command!r}, {s.text!r})")
 
     def s_ExecuteProgram(self, s: ast.ExecuteProgram, depth: int) -> None:
         """EXECUTE [task] program(args)[, cycles[, step]]: arguments by value."""

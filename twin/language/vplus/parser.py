@@ -13,7 +13,7 @@ from functools import lru_cache
 from importlib.resources import files
 from pathlib import Path
 
-from lark import Lark, Token, Transformer_NonRecursive, v_args
+from lark import Lark, Token, Transformer_NonRecursive, Tree, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
 
 from ...errors import ProgramError
@@ -43,6 +43,10 @@ def normalize_name(text: str) -> str:
 # LOC a location (a transformation, or a precision point for a # name).
 DECLARATION_TYPES = ("REAL", "DOUBLE", "LOC")
 UTF8_BOM = b"\xef\xbb\xbf"
+# Monitor commands of a command program ("MC" lines) that do what the program
+# instruction of the same name does.
+MONITOR_INSTRUCTIONS = ("EXECUTE", "ABORT", "KILL", "PROCEED", "ENABLE", "DISABLE", "CALIBRATE", "SIGNAL",
+                        "PARAMETER", "WAIT.START")
 BINARY_DIGITS = 8  # "^B ... binary (maximum of 8 bits)", [000] L3903-3905
 
 
@@ -278,6 +282,27 @@ class _ToAst(Transformer_NonRecursive):  # long expressions make deep trees
     def keyed_assignment(self, meta, children):
         name, args, value, *more = children
         return ast.KeyedAssign(str(name).upper(), args, value, more, **_pos(meta))
+
+    def mc_statement(self, meta, children):
+        """MC command: a monitor command that is also a program instruction (EXECUTE,
+        ENABLE, CALIBRATE...) is that instruction; monitor SPEED sets the monitor speed
+        (SPEED n MONITOR); the others are MonitorCommand (runtime.py)."""
+        token = children[0]
+        text = str(token)[2:].strip()
+        word = text.split(None, 1)[0].upper()
+        if word == "SPEED":
+            text += " MONITOR"
+        elif word not in MONITOR_INSTRUCTIONS:
+            return ast.MonitorCommand(word, text, **_pos(token))
+        try:
+            program = _parser().parse(f".PROGRAM mc()\n{text}\n.END\n").children[0]
+        except UnexpectedInput:
+            raise ProgramError(f"{msg.message(msg.SYNTAX_ERROR)} monitor command {text!r}",
+                               msg.SYNTAX_ERROR, line=token.line, column=token.column) from None
+        line = next(child for child in program.children if isinstance(child, Tree) and child.data == "line")
+        statement = self.transform(line.children[1])
+        statement.line, statement.column = token.line, token.column
+        return statement
 
     def encode_call(self, meta, children):
         return ast.Call("$ENCODE", [c for c in children[1:] if c is not None])

@@ -407,6 +407,20 @@ class Task(TaskControl):
     def set_switch(self, name: str, on: bool) -> None:
         self.system.switches[_pick(self.system.switches, name)] = on
 
+    def monitor_command(self, command: str, text: str) -> None:
+        """An "MC" line of a command program that no program instruction does.  LOAD of
+        a file this run has loaded (twin run loads every file it is given) does nothing;
+        anything else is an error at its step: twin run has no monitor."""
+        if command == "LOAD":
+            wanted = re.split(r"[\\/:]", text[4:].split("/")[0].strip().strip('"'))[-1]
+            stem = wanted.rsplit(".", 1)[0].lower()
+            if stem and any(Path(f).stem.lower() == stem for f in self.system.sources):
+                return
+            raise values.fail(msg.NONEXISTENT_FILE, f"MC {text}: twin run loads the files it is given "
+                                                    "(name this one on its command line)")
+        raise values.fail(msg.DEVICE_NOT_READY, f"MC {text}: there is no monitor (twin run loads the files "
+                                                "and starts the program)")
+
     def set_speed(self, value, rotation, modifiers: tuple) -> None:
         self.robot.set_speed(values._real(value), always="ALWAYS" in modifiers,
                              monitor="MONITOR" in modifiers,

@@ -43,6 +43,7 @@ from . import messages as msg
 from .fileio import IoError
 from .values import fail
 
+CLOSE_CLIENT = 600  # FCMND (lun, 600) $INTB(handle), as the ROS-Industrial drivers call it
 NEW_CONNECTION = 100
 CONNECTION_CLOSED = 101
 DEFAULT_BUFFER = 512
@@ -194,6 +195,25 @@ class TcpEndpoint:
             self.listener.close()
             self.listener = None
 
+    def command(self, code: int, data: str) -> None:
+        """FCMND on a TCP unit.  600 with `$INTB(handle)`: close that client's
+        connection and free its handle; after READ has reported the client gone
+        (IOSTAT 101) the handle is free already and the command just succeeds,
+        which is how servers use it.  Another number: *Illegal I/O device command*."""
+        if code != CLOSE_CLIENT:
+            raise IoError(msg.ILLEGAL_IO_COMMAND)
+        raw = data.encode("latin-1", errors="replace")
+        if len(raw) < 2 or not self.server:
+            raise IoError(msg.INVALID_ARGUMENT)  # no handle given, or a client unit
+        handle = int.from_bytes(raw[:2], "big", signed=True)
+        if not 1 <= handle <= self.max_clients:
+            raise IoError(msg.ILLEGAL_VALUE)
+        connection = self.connections.pop(handle, None)
+        if connection is not None:
+            connection.close()
+        if handle in self.new:
+            self.new.remove(handle)
+
     # ------------------------------------------------------------ polling
     def poll(self) -> None:
         """Once per simulated instant: accept waiting clients, take arrived bytes."""
@@ -246,8 +266,9 @@ class TcpEndpoint:
         """The next byte of the current client, or None: none has arrived."""
         self.poll()
         connection = self.connections.get(self.current)
-        if connection is None:
-            candidates = [c for _, c in sorted(self.connections.items()) if c.received]
+        if connection is None:  # no READ has chosen a client: the first with data, else one gone
+            ordered = [c for _, c in sorted(self.connections.items())]
+            candidates = [c for c in ordered if c.received] or [c for c in ordered if c.closed]
             connection = candidates[0] if candidates else None
         if connection is None or not connection.received:
             if connection is not None and connection.closed:
@@ -261,6 +282,9 @@ class TcpEndpoint:
         return any(c.received or c.closed for c in self.connections.values())
 
     def write(self, handle: int, data: bytes) -> None:
+        # The network accepts clients whether or not the program READs: a
+        # server that only sends (a feedback stream) sees its client connect.
+        self.poll()
         connection = self.connections.get(handle)
         if connection is None and handle == 0 and len(self.connections) == 1:
             connection = next(iter(self.connections.values()))

@@ -216,6 +216,13 @@ def _defined_element(table: dict, key: str, index) -> float:
     return TRUE if array is not None and index in array else FALSE
 
 
+def _element_or_none(table: dict, key: str, index):
+    """An array element passed to CALL by reference: its value, or None while
+    it (or its array) is undefined, which the callee sees as undefined."""
+    array = table.get(key)
+    return None if array is None else array.get(index)
+
+
 def _program_name(value) -> str:
     """CALLS: the program named by a string."""
     from .parser import normalize_name

@@ -7,13 +7,13 @@ import math
 
 import mujoco
 import numpy as np
-import trimesh
 
 from ..geometry import MM, rot_z, yaw_quat
 from .base import RETIRED, CellContext, Component
 
 TRAY_REGION_HEIGHT = 0.06  # m above a tray's floor that count as "in the tray"
 SWAP_CHECK_S = 0.5  # s between looks at a tray that is swapped when full
+SPREADER_SECTIONS = 32  # sides of the spreader cone's rim
 
 
 class Table(Component):
@@ -68,9 +68,12 @@ class Bin(Component):
         that grows back up to the belt."""
         radius, height = cfg.radius / MM, cfg.height / MM
         centre = np.array(cfg.center if cfg.center is not None else floor_center[:2] * MM, dtype=float) / MM
-        cone = trimesh.creation.cone(radius=radius, height=height, sections=32)
+        # The apex and a 32-gon rim; a mesh given without faces is the convex hull of its
+        # vertices (MuJoCo computes it, as it does for every mesh it collides).
+        angle = 2 * math.pi * np.arange(SPREADER_SECTIONS) / SPREADER_SECTIONS
+        rim = np.column_stack([radius * np.cos(angle), radius * np.sin(angle), np.zeros(SPREADER_SECTIONS)])
         name = f"{self.name}_spreader"
-        spec.add_mesh(name=name, uservert=cone.vertices.flatten(), userface=cone.faces.flatten())
+        spec.add_mesh(name=name, uservert=np.vstack([[0.0, 0.0, height], rim]).flatten())
         spec.worldbody.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name,
                                 pos=[centre[0], centre[1], floor_center[2]], rgba=[0.3, 0.4, 0.7, 1])
 

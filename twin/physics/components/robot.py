@@ -2,7 +2,9 @@
 
 The robot file's names, its joints in chain order and their <joint>_pos/_vel actuators are
 kept; its root body is moved to the scene's base pose. Any serial robot with one position
-and one velocity actuator per joint fits (the Cobra SCARA, the Cartesian gantry).
+and one velocity actuator per joint fits (the Cobra SCARA, the Cartesian gantry).  A
+`[robot.rail]` makes the root body slide along a linear rail (a joint "rail" with its
+servo, the last of the robot's joints; the kinematics' extra axis, docs/clients.md).
 
 Collisions (docs/motion.md): every check the contacts of the robot's and the gripper's geoms
 are examined. A robot geom touching the fixed cell, or touching a part other than as the
@@ -16,7 +18,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from ...controller.kinematics import RobotKinematics
+from ...controller.kinematics import LinearRail, RobotKinematics
 from ..geometry import matrix_to_quat, vplus_to_matrix
 from ..scene import load_model, resolve
 from .base import CellContext, Component
@@ -35,8 +37,10 @@ class Robot(Component):
         """The cell's spec starts as the robot's own file."""
         spec = load_model(self.config.model, self.scene_path, "robot.model")
         spec.modelname = "twin_cell"
-        # The robot's joints, in chain order (the robot file holds nothing else).
-        self.joint_names: list[str] = [j.name for j in spec.joints]
+        self.rail = _linear_rail(self.config.rail)
+        self.kinematics = RobotKinematics.from_mjcf(self.model_path, rail=self.rail)
+        # The robot's joints, in chain order (the robot file holds nothing else), then a rail.
+        self.joint_names: list[str] = [j.name for j in spec.joints] + ([self.rail.name] if self.rail else [])
         return spec
 
     def build(self, spec: mujoco.MjSpec, ctx: CellContext) -> None:
@@ -45,8 +49,31 @@ class Robot(Component):
         self.root_name = root.name
         root.pos = self.base_T[:3, 3]
         root.quat = matrix_to_quat(self.base_T[:3, :3])
-        root.first_body().sleep = mujoco.mjtSleepPolicy.mjSLEEP_NEVER  # the moving tree's root
+        if self.rail is not None:
+            self._add_rail(spec, root)
+        # The moving tree's root (the base itself when it rides a rail).
+        (root if self.rail is not None else root.first_body()).sleep = mujoco.mjtSleepPolicy.mjSLEEP_NEVER
         self.gravity_compensate(spec)
+
+    def _add_rail(self, spec: mujoco.MjSpec, root) -> None:
+        """The base rides the rail: a slide joint on the root body, its position and velocity
+        servo (gains for the ~20 kg that ride it; the feed-forward takes the inertia), and
+        the rail beam under the base's travel (drawn only: the base glides above it)."""
+        rail = self.rail
+        root.add_joint(name=rail.name, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=list(rail.direction),
+                       range=[rail.lower, rail.upper], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+                       damping=1.0, armature=0.1)
+        joint = mujoco.mjtTrn.mjTRN_JOINT
+        spec.add_actuator(name=f"{rail.name}_pos", target=rail.name, trntype=joint).set_to_position(kp=100000.0)
+        spec.add_actuator(name=f"{rail.name}_vel", target=rail.name, trntype=joint).set_to_velocity(kv=2000.0)
+        d = np.asarray(rail.direction)
+        centre = self.base_T[:3, 3] + self.base_T[:3, :3] @ d * (rail.lower + rail.upper) / 2
+        length = (rail.upper - rail.lower) / 2 + RAIL_BEAM_END
+        spec.worldbody.add_geom(name=f"{rail.name}_beam", type=mujoco.mjtGeom.mjGEOM_BOX,
+                                size=[length, RAIL_BEAM_WIDTH, RAIL_BEAM_HEIGHT / 2],
+                                pos=centre - self.base_T[:3, 2] * RAIL_BEAM_HEIGHT / 2,
+                                quat=matrix_to_quat(self.base_T[:3, :3] @ _frame_along(d)),
+                                contype=0, conaffinity=0, group=2, rgba=[0.35, 0.37, 0.4, 1.0])
 
     @staticmethod
     def gravity_compensate(spec: mujoco.MjSpec) -> None:
@@ -77,14 +104,15 @@ class Robot(Component):
         self._touching: set[tuple[int, int]] = set()
         self.collisions: list[dict] = []
         self._gripper = ctx.by_kind["gripper"]["gripper"]
-        self.kinematics = RobotKinematics.from_mjcf(self.model_path)
         self.payload_torque = np.zeros(len(self.dadr))  # set by the gripper while it holds a part
         self._jacp = np.zeros((3, m.nv))
 
     def home(self, location: list[float]) -> None:
-        """Put the robot at the IK of `location` (RIGHTY), held there by its servos."""
+        """Put the robot at the IK of `location` (RIGHTY), held there by its servos; a rail
+        at 0, where the scene's base pose puts the base."""
         kin, d = self.kinematics, self.data
         seed = np.where(np.isfinite(kin.lower + kin.upper), (kin.lower + kin.upper) / 2, 0.0)
+        seed[kin.arm_dof:] = 0.0
         q = kin.ik(vplus_to_matrix(location), seed, righty=True)
         d.qpos[self.qadr] = q
         d.ctrl[self.act_pos] = q
@@ -157,6 +185,32 @@ class Robot(Component):
                 "where": self.ctx.regions.region_of(d.geom_xpos[ours])})
             self.collisions.append(event)
         self._touching = touching
+
+
+RAIL_BEAM_HEIGHT = 0.04  # m, between the bench and the base (a scene puts the base this high)
+RAIL_BEAM_WIDTH = 0.07  # m, half width
+RAIL_BEAM_END = 0.12  # m, beyond each end of the travel (half the carriage)
+
+
+def _linear_rail(config) -> LinearRail | None:
+    """The scene's [robot.rail] in SI units, for the kinematics (None: no rail)."""
+    if config is None:
+        return None
+    d = np.asarray(config.direction, dtype=float)
+    d = d / np.linalg.norm(d)
+    return LinearRail(direction=(float(d[0]), float(d[1]), float(d[2])),
+                      lower=config.travel[0] / 1000.0, upper=config.travel[1] / 1000.0,
+                      max_velocity=config.speed / 1000.0, max_acceleration=config.acceleration / 1000.0,
+                      axis_number=config.gpl_axis)
+
+
+def _frame_along(d: np.ndarray) -> np.ndarray:
+    """A rotation whose X axis is the unit vector d (the beam's long side)."""
+    x = d / np.linalg.norm(d)
+    helper = np.array([0.0, 0.0, 1.0]) if abs(x[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    y = np.cross(helper, x)
+    y /= np.linalg.norm(y)
+    return np.column_stack([x, y, np.cross(x, y)])
 
 
 def _as_slice(indices: np.ndarray) -> slice | np.ndarray:

@@ -31,7 +31,7 @@ from . import gpl_class, shared
 from .args import integer
 from .conveyor import ConveyorFrame, conveyor_limit
 from .members import stored
-from .state import from_gpl_angles, solve_joints, to_gpl_angles, tool_pose
+from .state import axis_count, from_gpl_angles, solve_joints, to_gpl_angles, tool_pose
 
 CARTESIAN, ANGLES = 0, 1
 MAX_AXES = 12
@@ -79,7 +79,7 @@ class GplLocation:
 
     def __repr__(self) -> str:
         if self._type == ANGLES:
-            return f"Location(angles {self._angles[: self._rt.robot.kin.dof]})"
+            return f"Location(angles {self._angles[: axis_count(self._rt)]})"
         return f"Location{self._pose.components()}"
 
     # ------------------------------------------------------------ checks
@@ -102,7 +102,7 @@ class GplLocation:
     def joint_values(self) -> list[float]:
         """Axis values of an Angles location, one per robot axis."""
         self._angles_type()
-        return self._angles[: self._rt.robot.kin.dof]
+        return self._angles[: axis_count(self._rt)]
 
     def _set_total(self, pose: Location) -> None:
         self._pose = pose if self._frame is None else self._frame.total().inverse() * pose

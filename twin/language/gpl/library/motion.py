@@ -35,7 +35,7 @@ from .members import stored
 from .conveyor import belt_target
 from .locations import ANGLES, GplLocation, location_arg
 from .args import number
-from .state import flange_pose, flange_target, from_gpl_angles, matrix_m, righty_of, robot_state
+from .state import flange_pose, flange_target, from_gpl_angles, joint_of_axis, matrix_m, righty_of, robot_state
 
 def _percent(name: str, zero: bool = False):
     """A percentage property; `zero`: 0 is allowed too (Speed2 = 0: no secondary speed)."""
@@ -144,8 +144,9 @@ def _settle(rt):
         raise codes.from_controller(err) from None
 
 
-def _go(rt, flange: Location, profile: GplProfile, righty: bool | None, dest_q: np.ndarray | None = None):
-    """Start one motion of the flange to `flange` (robot base frame) with `profile`."""
+def _go(rt, flange, profile: GplProfile, righty: bool | None, dest_q: np.ndarray | None = None):
+    """Start one motion of the flange to `flange` (a Location, robot base frame, or joint
+    values in the controller's units) with `profile`."""
     profile = profile_arg(profile)
     check_ready(rt)
     state = robot_state(rt)
@@ -174,7 +175,10 @@ def _go_joints(rt, q: np.ndarray, profile):
     if not kin.within_limits(q):
         bad = int(np.nonzero((q < kin.lower - 1e-9) | (q > kin.upper + 1e-9))[0][0]) + 1
         raise codes.fail(codes.JOINT_OUT_OF_RANGE, f"axis {bad}")
-    yield from _go(rt, flange_pose(rt, q), profile, kin.is_righty(q), dest_q=np.array(q))
+    # A rail is not determined by the flange pose (the arm's inverse kinematics keeps it
+    # still): with one, the controller gets the joints themselves.
+    target = rt.robot.to_user_joints(q) if kin.rail is not None else flange_pose(rt, q)
+    yield from _go(rt, target, profile, kin.is_righty(q), dest_q=np.array(q))
 
 
 def _go_location(rt, loc: GplLocation, profile):
@@ -224,10 +228,11 @@ class Move:
         """Move one axis (1-based) to `position` (degrees or mm), or by it when `relative`."""
         q = destination_joints(rt).copy()
         n = int(axis)
-        if not 1 <= n <= len(q):
+        joint = joint_of_axis(rt, n)
+        if joint is None:
             raise codes.fail(codes.INVALID_ARGUMENT, f"axis {axis}")
-        value = from_gpl_angles(rt, [0.0] * (n - 1) + [float(position)])[n - 1]
-        q[n - 1] = q[n - 1] + value if relative else value
+        value = from_gpl_angles(rt, [0.0] * (n - 1) + [float(position)])[joint]
+        q[joint] = q[joint] + value if relative else value
         yield from _go_joints(rt, q, profile)
 
     @shared

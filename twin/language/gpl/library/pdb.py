@@ -50,7 +50,23 @@ def _const(*values) -> Callable[[Any], list]:
 
 
 def _axes(rt) -> int:
-    return rt.robot.kin.dof
+    from .state import axis_count  # noqa: PLC0415 - state imports numpy arrays of the model
+    return axis_count(rt)
+
+
+def _axis_mask(rt) -> int:
+    """Bit n-1 for each axis n the robot has (a PF400 on a rail: axes 1-4 and 6)."""
+    return sum(1 << (axis - 1) for axis in rt.robot.kin.axis_numbers)
+
+
+def _link_lengths(rt) -> list:
+    """A SCARA's inner and outer link lengths (mm) in slots 2 and 3, as a PF400's controller
+    lists them (0, 302, 289, 0, ...: a field unit's calib01.pac); zeros for other robots."""
+    values = [0.0] * 16
+    scara = rt.robot.kin.scara
+    if scara is not None:
+        values[1], values[2] = round(scara.l1 * 1000.0, 6), round(scara.l2 * 1000.0, 6)
+    return values
 
 
 def _per_axis(value) -> Callable[[Any], list]:
@@ -61,7 +77,8 @@ def _model(attribute: str) -> Callable[[Any], list]:
     """A per-joint array of the robot model in GPL units (degrees, mm)."""
     def values(rt) -> list:
         from .state import to_gpl_angles  # noqa: PLC0415 - state imports numpy arrays of the model
-        return [round(v, 3) for v in to_gpl_angles(rt, np.asarray(getattr(rt.robot.kin, attribute)))]
+        # Rounded to a micro-unit: the model stores radians, the database degrees.
+        return [round(v, 6) for v in to_gpl_angles(rt, np.asarray(getattr(rt.robot.kin, attribute)))]
     return values
 
 
@@ -84,17 +101,12 @@ def _set_test_speed(rt, values: list) -> None:
     rt.robot.set_speed(speed, monitor=True)
 
 
-# System state (DataID 234), as the TCP Command Server 3.0 labels it: 7 "Power off - waiting
-# for power request TRUE", 20 "Power on - ready to have GPL attach robot", 21 "GPL project
-# attached to robot".
-SYS_POWER_OFF, SYS_POWER_ON, SYS_ATTACHED = 7, 20, 21
-
-
+# System state (DataID 234), Controller.PowerState's numbers (robot.power_state), as the TCP
+# Command Server 3.0 labels them: 7 "Power off - waiting for power request TRUE", 20 "Power on
+# - ready to have GPL attach robot", 21 "GPL project attached to robot".
 def _system_state(rt) -> list:
-    state = robot_state(rt)
-    if not state.power:
-        return [SYS_POWER_OFF]
-    return [SYS_ATTACHED if state.attached_by is not None else SYS_POWER_ON]
+    from .robot import power_state  # noqa: PLC0415 - robot imports this module
+    return [power_state(rt)]
 
 
 def _power(rt) -> list:
@@ -153,7 +165,7 @@ TABLE: dict[int, Entry] = {
     125: Entry("Serial console enable", "bool", _const(True)),  # manual L2859, .pac controller
     212: Entry("Auto home at startup", "bool", _const(False)),  # .pac controller; PDB homing setup
     213: Entry("Home all robots", "int", _const(0), store=_home_all),  # TCS 3.0 Cmd_HomeAll
-    234: Entry("System state", "int", _system_state, READ_ONLY, live=True),  # TCS 3.0 Cmd_SysState, Globals labels
+    234: Entry("Power state", "int", _system_state, READ_ONLY, live=True),  # PyLabRobot DataIDs; TCS 3.0 SysState
     240: Entry("Automatic power on", "bool", _const(False)),  # .pac controller
     241: Entry("Power enable", "bool", _power, store=_set_power),  # Brooks error list (-1600); TCS 3.0 Cmd_Hp
     262: Entry("Timeout waiting for power to come on in sec", "num", _const(1.0)),  # .pac controller
@@ -169,13 +181,15 @@ TABLE: dict[int, Entry] = {
     # Robot configuration
     2000: _robot("Number of axes", "int", lambda rt: [_axes(rt)], READ_ONLY),  # PDB
     2002: _robot("Robot Name", "str", _const("Robot 1")),  # PDB
-    2003: _robot("Axis Mask", "int", lambda rt: [(1 << _axes(rt)) - 1], READ_ONLY),  # PDB
+    2003: _robot("Axis Mask", "int", lambda rt: [_axis_mask(rt)], READ_ONLY),  # PDB
     2007: _robot("Robot model number or version", "int", lambda rt: [_model_number(rt)], READ_ONLY),  # .pac robot
     # Speeds and accelerations: the robot model's limits, which the planner uses
     2700: _robot("100% joint speeds in (mm or deg)/sec", "num", _model("max_velocity"), READ_ONLY),  # .pac robot
     2702: _robot("100% joint accels in (mm or deg)/sec^2", "num", _model("max_acceleration"),
                  READ_ONLY),  # .pac robot
     # Homing (stored: the twin's homing is instantaneous, its encoders absolute)
+    2800: Entry("Robot homed", "bool", lambda rt: [robot_state(rt).homed], READ_ONLY, robot=True,
+                live=True),  # PyLabRobot DataIDs; the AD-SDL PF400 driver reads it
     2801: _robot("Robot homed DOUT", "int", _const(0)),  # .pac robot
     2802: _robot("Homing sequence", "int", _const(2)),  # .pac robot
     2803: _robot("Homing method", "int", _per_axis(-9)),  # .pac robot
@@ -183,6 +197,7 @@ TABLE: dict[int, Entry] = {
     2813: _robot("Timeout on home axis, sec", "num", _const(0.0)),  # .pac robot
     # Calibration
     16000: _robot("Robot serial number", "str", _const("TWIN-0001")),  # PDB
+    16050: _robot("Kinematic dimensional constants", "num", _link_lengths, READ_ONLY),  # PDB, .pac calib
     16051: _robot("Tool set at restart", "num", _mounted_tool),  # PDB; the cell's gripper
     16052: _robot("Base set at restart", "num", _const(*[0.0] * 6)),  # PDB
     16066: _robot("Dynamic feedforward enable", "bool", _const(False)),  # .pac calib (the twin has no DFF)

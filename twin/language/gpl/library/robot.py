@@ -17,10 +17,22 @@ from .locations import GplLocation, location_arg
 from .motion import GplProfile, destination_joints
 from .state import check_robot, config_of, robot_state, to_gpl_angles, tool_pose
 
-# Controller.PowerState values (twin-defined: the manual does not list the sequence's states).
-POWER_STATE_OFF, POWER_STATE_ON = 0, 20
+# Controller.PowerState values, as DataID 234 numbers them (the manual does not list them;
+# PyLabRobot's PreciseFlex DataIDs, pylabrobot/brooks/precise_flex/data_ids.py, do, and the
+# TCP Command Server 3.0 labels them the same): 7 off, waiting for the enable signal; 20 on,
+# ready for attach; 21 on, a thread attached.
+POWER_STATE_OFF, POWER_STATE_ON, POWER_STATE_ATTACHED = 7, 20, 21
 # Robot.TrajState values (TCP Command Server 3.0 state labels).
 TRAJ_HALTED, TRAJ_IDLE, TRAJ_MOVING = 0, 1, 3
+
+
+def power_state(rt) -> int:
+    """Controller.PowerState, DataID 234: off, on, or on with robot 1 attached to a thread."""
+    state = robot_state(rt)
+    if not state.power:
+        return POWER_STATE_OFF
+    holder = state.attached_by
+    return POWER_STATE_ATTACHED if holder is not None and getattr(holder, "alive", True) else POWER_STATE_ON
 
 
 @gpl_class("Robot")
@@ -252,10 +264,10 @@ class Controller:
 
     @shared
     def PowerState(rt, mode=0) -> int:
-        """The high power sequence state, 0 off, 20 on (twin codes); `mode` (GPL Dictionary,
+        """The high power sequence state (power_state); `mode` (GPL Dictionary,
         Controller.PowerState(mode)) selects nothing else in the twin."""
         number(mode)
-        return POWER_STATE_ON if robot_state(rt).power else POWER_STATE_OFF
+        return power_state(rt)
 
     @shared
     def SoftEStop(rt) -> bool:

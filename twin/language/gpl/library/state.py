@@ -73,16 +73,31 @@ def revolute(rt) -> np.ndarray:
     return rt.robot.kin.revolute
 
 
+def axis_count(rt) -> int:
+    """The robot's highest GPL axis number (a PF400 on a rail: 6, its rail; axis 5, the
+    servo gripper, is not one of the twin's joints and reads 0)."""
+    return max(rt.robot.kin.axis_numbers)
+
+
+def joint_of_axis(rt, axis: int) -> int | None:
+    """Index in the joint vector of GPL axis `axis` (1-based), None when no joint is."""
+    numbers = rt.robot.kin.axis_numbers
+    return numbers.index(axis) if axis in numbers else None
+
+
 def to_gpl_angles(rt, q: np.ndarray) -> list[float]:
-    """Joint vector (rad, m) as GPL axis values (degrees, mm)."""
-    return [float(np.degrees(v)) if r else float(v * MM) for v, r in zip(q, revolute(rt))]
+    """Joint vector (rad, m) as GPL axis values (degrees, mm), axis 1 first."""
+    values = [0.0] * axis_count(rt)
+    for v, r, axis in zip(q, revolute(rt), rt.robot.kin.axis_numbers):
+        values[axis - 1] = float(np.degrees(v)) if r else float(v * MM)
+    return values
 
 
 def from_gpl_angles(rt, values: list[float]) -> np.ndarray:
-    """GPL axis values (degrees, mm) as a joint vector (rad, m); missing axes are 0."""
-    n = rt.robot.kin.dof
-    values = (list(values) + [0.0] * n)[:n]
-    return np.array([np.radians(v) if r else v / MM for v, r in zip(values, revolute(rt))])
+    """GPL axis values (degrees, mm; axis 1 first) as a joint vector (rad, m); missing axes are 0."""
+    values = list(values) + [0.0] * axis_count(rt)
+    return np.array([np.radians(values[axis - 1]) if r else values[axis - 1] / MM
+                     for r, axis in zip(revolute(rt), rt.robot.kin.axis_numbers)])
 
 
 # ------------------------------------------------------------ world <-> flange

@@ -23,10 +23,17 @@ ABSENT_INSTRUCTIONS = {
     "AMOVE": "no extra axes",
     "MOVEF": "MOVEF/MOVESF door-to-door motions are not modelled",
     "MOVESF": "MOVEF/MOVESF door-to-door motions are not modelled",
+    # Shared memory of other processor boards on the controller's bus, and third-party
+    # digital I/O boards: the cell's controller is a single CPU with its own I/O only.
+    **{f"IOPUT{kind}": "no bus memory of other processor boards (IOPUT_)" for kind in "BWLFDS"},
+    "DEF.DIO": "no third-party digital I/O board (DEF.DIO)",
 }
 ABSENT_FUNCTIONS = {
     "TIME": "no calendar clock in the packed TIME() form ($TIME gives the simulated clock)",
     "STATUS": "no monitor STATUS information for programs",
+    **{f"IOGET{kind}": "no bus memory of other processor boards (IOGET_)" for kind in "BWLFD"},
+    "$IOGETS": "no bus memory of other processor boards ($IOGETS)",
+    "IOTAS": "no bus memory of other processor boards (IOTAS)",
 }
 
 

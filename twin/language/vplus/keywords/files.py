@@ -128,9 +128,21 @@ def _refuse(rt, unit: tuple, items: tuple):
     devices.run(rt.number, _arg(unit, 0), refuse)
 
 
-# FCMND: rename, format, mkdir, rmdir and DDCMP settings; their command numbers
-# are in the Language Reference Guide, which we do not have.
-instruction("FCMND")(_refuse)
+@instruction("FCMND")
+def _fcmnd(rt, unit: tuple, items: tuple):
+    """FCMND (lun, command) $data.  On a TCP unit, the network commands servers
+    use (../tcp.py: 600 closes a client).  The disk and serial commands (rename,
+    format, mkdir, rmdir, DDCMP settings) have numbers only the Language
+    Reference Guide gives, which we do not have: *Illegal I/O device command*."""
+    devices = _devices(rt)
+
+    def command(task, lun):
+        attached = devices.unit(task, lun)
+        if attached.tcp is None:
+            raise IoError(msg.ILLEGAL_IO_COMMAND)
+        attached.tcp.command(_arg(unit, 1), _str(items[0]) if items else "")
+
+    devices.run(rt.number, _arg(unit, 0), command)
 
 
 @instruction("FOPEN")
