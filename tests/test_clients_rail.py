@@ -120,7 +120,7 @@ def test_pylabrobot_moves_the_rail_to_pick_and_place_across_the_bench(tmp_path):
     assert log["axes"] == ["6", "47", "401.5,93,348,960,0,500"]
     assert log["start"][PFAxis.RAIL] == pytest.approx(0.0, abs=0.05)
     assert log["rail_1"] == -400.0
-    assert log["too_far"] == -1025  # the arm alone does not reach it
+    assert log["too_far"] == -1033  # the arm alone does not reach it (Invalid Cartesian value)
     at = log["at_rail_1"]
     assert at[PFAxis.RAIL] == pytest.approx(-400.0, abs=0.05)
     for axis in (PFAxis.BASE, PFAxis.SHOULDER, PFAxis.ELBOW, PFAxis.WRIST):  # the arm stayed still

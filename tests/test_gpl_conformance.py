@@ -764,7 +764,8 @@ def test_source_angles_and_power_state_mode(tmp_path):
         Console.WriteLine(Format(Robot.SourceAngles.Angle(2) - start.Angle(2), "0.000"))
 """)
     assert report.errors == []
-    assert report.output.splitlines() == ["0", "20", "0.000", "0.000", "20.000", "-15.000"]
+    # PowerState: 7 off, 21 on with the robot attached (DataID 234, robot.power_state)
+    assert report.output.splitlines() == ["7", "21", "0.000", "0.000", "20.000", "-15.000"]
 
 
 def test_pdb_as_the_tcp_command_server_reads_it(tmp_path):
