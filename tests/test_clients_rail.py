@@ -117,7 +117,7 @@ def test_pylabrobot_moves_the_rail_to_pick_and_place_across_the_bench(tmp_path):
     assert served.returncode == 0, served.stderr
 
     # Six axes, the mask of axes 1-4 and 6, the rail's soft limits last.
-    assert log["axes"] == ["6", "47", "401.5,93,348,960,0,500"]
+    assert log["axes"] == ["6", "47", "401.5,93,348,960,134,500"]
     assert log["start"][PFAxis.RAIL] == pytest.approx(0.0, abs=0.05)
     assert log["rail_1"] == -400.0
     assert log["too_far"] == -1033  # the arm alone does not reach it (Invalid Cartesian value)

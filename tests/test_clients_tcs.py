@@ -31,11 +31,11 @@ def test_the_command_set_over_a_raw_socket():
         assert tcs("mspeed 50") == "0" and tcs("mspeed") == "0 50"
         assert tcs("payload 25") == "0" and tcs("payload") == "0 25"
         assert tcs("pd 100") == "0 Brooks Automation"
-        assert tcs("pd 2000 1") == "0 4"  # number of axes of robot 1
+        assert tcs("pd 2000 1") == "0 5"  # number of axes of robot 1: the arm's 4, the gripper
         assert tcs("pd 2003 1") == "0 15"  # axis mask: axes 1 to 4
         assert tcs("pd 16050 1") == "0 0,302,289" + ",0" * 13  # the link lengths, as a PF400 lists them
-        assert tcs("pd 16077 1") == "0 401.5,93,348,960"  # soft limits (the field unit's)
-        assert tcs("pd 16078 1") == "0 1.5,-93,12,-960"
+        assert tcs("pd 16077 1") == "0 401.5,93,348,960,134"  # soft limits (the field unit's)
+        assert tcs("pd 16078 1") == "0 1.5,-93,12,-960,69"
         assert tcs("sig 7 1") == "0" and tcs("sig 7") == "0 7 -1"
         assert tcs("tool") == "0 -60 0 50 0 0 0"  # the gripper's pads (the TCS sets it)
         assert tcs("base") == "0 0 0 0 0"

@@ -4,6 +4,11 @@ variable, continue, plot the joints; and each way of stopping, teaching, inline 
 
 from __future__ import annotations
 
+import os
+import socket
+import subprocess
+import sys
+
 import matplotlib
 import numpy as np
 import pytest
@@ -12,6 +17,7 @@ import twin
 from twin.physics.scene import load_scene
 
 from conftest import ROOT
+from test_recorder import read_rrd
 
 matplotlib.use("Agg")
 
@@ -78,3 +84,42 @@ def test_teach_a_location_and_save_it_to_the_cell_file(tmp_path):
     assert saved["above"] == saved["pick"]
     assert set(saved) >= {"start", "place"}
     assert "pick" in cell.locations and cell.locations["above"].z == pytest.approx(here.z)
+
+
+def test_the_inline_rerun_viewer_shows_the_run_live(tmp_path):
+    """cell.viewer(): rerun's notebook widget, connected to the run served on a loopback port
+    (made before running; the program restarts at t = 0), the .rrd still written beside it."""
+    notebook = pytest.importorskip("rerun.notebook")
+    if not notebook.HAS_NOTEBOOK:
+        pytest.skip("rerun-notebook is not installed")
+    cell = twin.open_cell("scenes/scara_pick.toml", rrd=tmp_path / "run.rrd")
+    cell.load("programs/vplus/move_parts.pg")
+    widget = cell.viewer(width=800, height=500)
+    assert isinstance(widget, notebook.Viewer)
+    url = widget._viewer._url                   # what the widget's front end connects to
+    host, port = url.removeprefix("rerun+http://").removesuffix("/proxy").split(":")
+    assert host == "127.0.0.1"
+    cell.run(until=2.0, progress=False)
+    with socket.socket() as s:
+        assert s.connect_ex((host, int(port))) == 0      # the run is being served there
+    assert cell.viewer()._viewer._url == url          # the same run, the same address
+    cell.close()
+    rrd = read_rrd(tmp_path / "run.rrd")
+    assert {"/world/tcp", "/program/log", "/robot/joints/j1"} <= set(rrd)
+    late = twin.open_cell("scenes/scara_pick.toml")
+    late.load("programs/vplus/move_parts.pg")
+    late.run(until=0.5, progress=False)
+    with pytest.raises(RuntimeError, match=r"t = 0\.5.* before cell.run"):
+        late.viewer()                              # the run so far was not recorded for it
+
+
+def test_without_the_notebook_widget_viewer_says_what_to_install(tmp_path):
+    """Without rerun-notebook installed (blocked here in a fresh interpreter), a clear message."""
+    script = ("import sys; sys.modules['rerun_notebook'] = None\n"
+              "import twin\n"
+              "try:\n    twin.open_cell('scenes/scara_pick.toml').viewer()\n"
+              "except RuntimeError as e:\n    print(e)\n")
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, cwd=tmp_path,
+                         env={**os.environ, "MUJOCO_GL": "egl"}, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert "pip install 'twin[notebook]'" in out.stdout and "Traceback" not in out.stderr

@@ -31,5 +31,8 @@ def test_the_notebook_runs_clean_and_draws_its_plots(path, tmp_path, monkeypatch
     assert not [o for o in outputs if o.output_type == "error"]
     images = [o for o in outputs if "image/png" in o.get("data", {})]
     assert len(images) == (3 if path.stem == "getting_started" else 1)   # every plot drawn
+    for cell in notebook.cells:
+        if cell.cell_type == "code" and ".viewer(" in cell.source:   # the inline Rerun viewer, shown
+            assert any("application/vnd.jupyter.widget-view+json" in o.get("data", {}) for o in cell.outputs)
     assert _repository_state() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == []

@@ -41,10 +41,8 @@ def test_a_relative_path_that_does_not_exist_is_looked_up_among_the_resources(tm
     assert find_user_file("nothing/here.pg") == Path("nothing/here.pg")
 
 
-@pytest.fixture(scope="module")
-def installed(tmp_path_factory) -> Path:
-    """A fresh venv with the wheel built from this checkout; returns its bin/ folder."""
-    work = tmp_path_factory.mktemp("wheel")
+def build_wheel(work: Path) -> Path:
+    """The wheel of (a copy of) this checkout, built in `work` without build isolation."""
     src = work / "src"
     src.mkdir()
     for name in SOURCES:
@@ -57,7 +55,14 @@ def installed(tmp_path_factory) -> Path:
     subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "--no-build-isolation",
                     "--disable-pip-version-check", "-w", str(dist), "."], cwd=src, check=True)
     (wheel,) = dist.glob("twin-*.whl")
+    return wheel
 
+
+@pytest.fixture(scope="module")
+def installed(tmp_path_factory) -> Path:
+    """A fresh venv with the wheel built from this checkout; returns its bin/ folder."""
+    work = tmp_path_factory.mktemp("wheel")
+    wheel = build_wheel(work)
     venv = work / "venv"
     subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True)
     site = Path(sysconfig.get_paths(vars={"base": str(venv), "platbase": str(venv)})["purelib"])
@@ -73,7 +78,7 @@ def installed(tmp_path_factory) -> Path:
     return venv / "bin"
 
 
-def _clean_env() -> dict:
+def clean_env() -> dict:
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME", "VIRTUAL_ENV")}
     env.setdefault("MUJOCO_GL", "egl")
     return env
@@ -84,7 +89,7 @@ def test_the_installed_package_is_the_wheels_and_knows_its_version(installed, tm
         [str(installed / "python"), "-c",
          "import sys, twin, twin.resources as r; print(twin.__file__); print(r.resource_root()); "
          "print(any(p.rstrip('/') == sys.argv[1] for p in sys.path))", str(ROOT)],
-        cwd=tmp_path, env=_clean_env(), capture_output=True, text=True, check=True)
+        cwd=tmp_path, env=clean_env(), capture_output=True, text=True, check=True)
     module, resources, repo_on_path = probe.stdout.split("\n")[:3]
     venv = installed.parent
     assert Path(module).is_relative_to(venv) and Path(resources).is_relative_to(venv)
@@ -98,7 +103,7 @@ def test_the_installed_package_is_the_wheels_and_knows_its_version(installed, tm
 def test_the_bundled_demo_runs_from_an_empty_directory(installed, tmp_path, program):
     run = subprocess.run(
         [str(installed / "twin"), "run", program, "--max-sim-time", "6", "--report", "report.json"],
-        cwd=tmp_path, env=_clean_env(), capture_output=True, text=True)
+        cwd=tmp_path, env=clean_env(), capture_output=True, text=True)
     assert "Traceback" not in run.stderr
     report = json.loads((tmp_path / "report.json").read_text())
     # Stopped by the time limit (and only by it), having put parts on the belt and in the bin.

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import io
 import re
+import socket
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -74,6 +75,7 @@ class Cell:
         self._program: str | Path | None = None
         self._main: str | None = None
         self._inline_dir: tempfile.TemporaryDirectory | None = None
+        self._serve_port: int | None = None    # set by viewer(): each run is served there
         self.console = Console(stdin=io.StringIO(""))
         self.started: StartedRun | None = None
         self.sim = Simulation(self.scene, seed=seed)   # until a program is loaded: the cell alone
@@ -111,7 +113,7 @@ class Cell:
             self.started, self.sim = None, Simulation(self.scene, seed=self.seed)
         else:
             # The recording is written as the cell runs (a notebook never "finishes" a run).
-            recorder = self._recorder if self.rrd is not None else None
+            recorder = self._recorder if self.rrd is not None or self._serve_port is not None else None
             self.started = start_program(self._program, self.scene, self._main, rrd_path=self.rrd, seed=self.seed,
                                          console=self.console, recorder=recorder)
             self.sim = self.started.simulation
@@ -122,7 +124,30 @@ class Cell:
     def _recorder(self, sim: Simulation):
         from .recorder import Recorder  # here: rerun is imported only when recording
 
-        return Recorder(sim.cell.model, self.rrd)
+        return Recorder(sim.cell.model, self.rrd, serve_port=self._serve_port)
+
+    def viewer(self, width: int | None = None, height: int | None = None):
+        """The Rerun viewer inline in the notebook (rerun's notebook widget), showing the run
+        live as it goes: display it (the last expression of a cell) and `run` in the next.
+        Each run is served on a loopback port of this machine, which the widget connects to
+        (the browser must run where the kernel does), and still written to `rrd` if given.
+        Call it before running: at t > 0 the run so far was not recorded for it."""
+        try:
+            from rerun.notebook import HAS_NOTEBOOK, Viewer
+        except ImportError:
+            HAS_NOTEBOOK = False
+        if not HAS_NOTEBOOK:
+            raise RuntimeError("cell.viewer() needs Rerun's notebook widget: pip install 'twin[notebook]' "
+                               "(it brings rerun-sdk[notebook]); or record with rrd=... and open the file "
+                               "in the Rerun viewer")
+        if self._serve_port is None:
+            if self.started is not None and self.time > 0:
+                raise RuntimeError(f"the run is at t = {self.time:.3f} s and was not recorded for a viewer: "
+                                   "call cell.viewer() before cell.run(), or cell.reset() after it")
+            self._serve_port = _free_port()
+            if self.started is not None:
+                self.reset()   # at t = 0: the same run, now served
+        return Viewer(url=f"rerun+http://127.0.0.1:{self._serve_port}/proxy", width=width, height=height)
 
     @property
     def system(self):
@@ -173,6 +198,8 @@ class Cell:
         finally:
             if bar is not None:
                 bar.close()
+            if self.sim.recorder is not None:
+                self.sim.recorder.send_buffered()   # the viewer shows the run up to here
         return reason[0]
 
     @property
@@ -350,6 +377,12 @@ class Cell:
 
 
 _LOCATION_LINE = re.compile(r"^(\s*)([A-Za-z_][\w.]*)\s*=")
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
 
 
 def write_locations(scene_text: str, taught: dict[str, Location]) -> str:

@@ -17,7 +17,10 @@ Entity layout in the viewer::
     program/log                       TYPE output line by line at its time, and errors (TextLog)
     program/task<n>/line              the program line task n is at, when it changes (TextLog)
     program/task<n>/line_number       the same line as a number (scalar)
+    program/thread_<name>/line, .../line_number   the same for each GPL thread
     world/tcp                         the tool tip at each frame (Points3D: its path over time)
+    world/plan                        the tool tip's path as planned, for each motion at the
+                                      simulated time it was planned (LineStrips3D)
     world/regions/<name>              the scene's regions (Boxes3D, static)
     world/locations/<name>            the taught locations (Transform3D axes, static)
     gripper/closed, gripper/force_n   the hand's state and its grip force on the held part
@@ -45,9 +48,10 @@ import numpy as np
 import rerun as rr
 import trimesh
 
-__all__ = ["Recorder", "geom_mesh"]
+__all__ = ["Recorder", "geom_mesh", "entity_part"]
 
 TIMELINE = "sim_time"
+PLAN_COLOUR = (255, 160, 0)   # the planned paths, beside the executed one
 PLANE_HALF_SIZE = 2.0   # metres: an infinite MuJoCo plane (size 0) is drawn this big
 
 
@@ -55,7 +59,8 @@ def _name(model: mujoco.MjModel, objtype, i: int, prefix: str) -> str:
     return mujoco.mj_id2name(model, objtype, i) or f"{prefix}{i}"
 
 
-def _part(text: str) -> str:
+def entity_part(text: str) -> str:
+    """`text` as one part of an entity path (slashes, spaces... escaped)."""
     return rr.escape_entity_path_part(text)
 
 
@@ -118,20 +123,23 @@ class Recorder:
     """Record a MuJoCo simulation to Rerun.
 
     ``path``: the .rrd file to write (parent folders are created); ``spawn``: also
-    stream to a viewer. With neither, the recorder is disabled and costs next to
-    nothing. Call ``wants_frame``/``sample`` from the physics loop, then ``close``.
+    stream to a viewer started for it; ``connect``: to a viewer at that address;
+    ``serve_port``: serve the recording on this loopback port for viewers that connect
+    (it buffers everything for a late one). With none, the recorder is disabled and
+    costs next to nothing. Call ``wants_frame``/``sample`` from the physics loop, then ``close``.
     """
 
     def __init__(self, model: mujoco.MjModel, path: str | Path | None, app_id: str = "twin",
                  fps: float = 30.0, spawn: bool = False, *, chunk_frames: int = 600,
-                 geom_groups: tuple[int, ...] = (0, 1, 2), connect: str | None = None) -> None:
+                 geom_groups: tuple[int, ...] = (0, 1, 2), connect: str | None = None,
+                 serve_port: int | None = None) -> None:
         if fps <= 0:
             raise ValueError("fps must be positive")
         self.model = model
         self.path = Path(path) if path is not None else None
         self.fps = float(fps)
         self.chunk_frames = max(1, int(chunk_frames))
-        self.enabled = self.path is not None or spawn or connect is not None
+        self.enabled = self.path is not None or spawn or connect is not None or serve_port is not None
         self._geom_groups = tuple(geom_groups)
         self._closed = False
         self._next_frame = -math.inf
@@ -146,6 +154,8 @@ class Recorder:
                 sinks.append(rr.GrpcSink())
             if connect is not None:
                 sinks.append(rr.GrpcSink(connect))
+            if serve_port is not None:   # a viewer connects to us (the notebook's inline viewer)
+                sinks.append(rr.GrpcServerSink(bind_ip="127.0.0.1", port=serve_port))
             if self.path is not None:
                 self.path.parent.mkdir(parents=True, exist_ok=True)
                 sinks.append(rr.FileSink(str(self.path)))
@@ -159,7 +169,7 @@ class Recorder:
         self._joints = np.flatnonzero((jt == mujoco.mjtJoint.mjJNT_HINGE) | (jt == mujoco.mjtJoint.mjJNT_SLIDE))
         self._joint_qadr = model.jnt_qposadr[self._joints]
         self._joint_scale = np.where(jt[self._joints] == mujoco.mjtJoint.mjJNT_HINGE, 180.0 / math.pi, 1000.0)
-        self._joint_paths = ["robot/joints/" + _part(_name(model, mujoco.mjtObj.mjOBJ_JOINT, j, "joint"))
+        self._joint_paths = ["robot/joints/" + entity_part(_name(model, mujoco.mjtObj.mjOBJ_JOINT, j, "joint"))
                              for j in self._joints]
 
         n, nb, nj = self.chunk_frames, len(self._moving), len(self._joints)
@@ -173,6 +183,8 @@ class Recorder:
         self._tcp_site: int | None = None      # set by log_cell: the tool tip's site
         self._tcp = np.empty((n, 3))
         self._scalars: dict[str, tuple[list[float], list[float]]] = {}
+        self._texts: dict[str, tuple[list[float], list[str], list[str]]] = {}
+        self._plans: list[tuple[float, np.ndarray, str]] = []
         self._scalar_count = 0
 
         if self.enabled:
@@ -185,7 +197,7 @@ class Recorder:
         used: set[str] = set()
         paths = ["world"]
         for b in range(1, m.nbody):
-            name = _part(_name(m, mujoco.mjtObj.mjOBJ_BODY, b, "body"))
+            name = entity_part(_name(m, mujoco.mjtObj.mjOBJ_BODY, b, "body"))
             while name in used:
                 name = f"{name}_{b}"
             used.add(name)
@@ -214,31 +226,41 @@ class Recorder:
                 rec.log(self._body_paths[b], rr.Transform3D(
                     translation=d.xpos[b], quaternion=d.xquat[b][[1, 2, 3, 0]]), static=True)
         used = set(self._used_names)
+        shapes: dict[tuple, rr.Mesh3D] = {}   # the pool's parts share a few shapes: each built once
         for g in range(m.ngeom):
             invisible = m.geom_rgba[g][3] == 0 and m.geom_matid[g] < 0
             if m.geom_group[g] not in self._geom_groups or invisible:
                 continue
-            mesh = geom_mesh(m, g)
-            if mesh is None or len(mesh.faces) == 0:
-                continue
             b = m.geom_bodyid[g]
-            name = _part(_name(m, mujoco.mjtObj.mjOBJ_GEOM, g, "geom"))
+            name = entity_part(_name(m, mujoco.mjtObj.mjOBJ_GEOM, g, "geom"))
             if b == 0:
                 while name in used:
                     name = f"{name}_{g}"
                 used.add(name)
+            rgba = (_geom_rgba(m, g) * 255).round().astype(np.uint8)
+            key = (int(m.geom_type[g]), m.geom_size[g].tobytes(), int(m.geom_dataid[g]), rgba.tobytes())
+            if key not in shapes:
+                shapes[key] = self._geom_shape(g, rgba)
+            if shapes[key] is None:
+                continue
             path = f"{self._body_paths[b]}/{name}"
-            shaded = mesh.smooth_shaded if m.geom_type[g] != mujoco.mjtGeom.mjGEOM_PLANE else mesh
-            rgba = _geom_rgba(m, g)
-            rec.log(path, rr.Transform3D(translation=m.geom_pos[g], quaternion=m.geom_quat[g][[1, 2, 3, 0]]),
-                    static=True)
-            rec.log(path, rr.Mesh3D(
-                vertex_positions=np.asarray(shaded.vertices, np.float32),
-                triangle_indices=np.asarray(shaded.faces, np.uint32),
-                vertex_normals=np.asarray(shaded.vertex_normals, np.float32),
-                albedo_factor=(rgba * 255).round().astype(np.uint8),
-                face_rendering=("DoubleSided" if m.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE else None),
-            ), static=True)
+            if m.geom_pos[g].any() or not np.array_equal(m.geom_quat[g], [1, 0, 0, 0]):
+                rec.log(path, rr.Transform3D(translation=m.geom_pos[g], quaternion=m.geom_quat[g][[1, 2, 3, 0]]),
+                        static=True)
+            rec.log(path, shapes[key], static=True)
+
+    def _geom_shape(self, g: int, rgba: np.ndarray) -> rr.Mesh3D | None:
+        """Geom g's Mesh3D (shaded, coloured), or None when it is not drawn."""
+        m = self.model
+        mesh = geom_mesh(m, g)
+        if mesh is None or len(mesh.faces) == 0:
+            return None
+        plane = m.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE
+        shaded = mesh if plane else mesh.smooth_shaded
+        return rr.Mesh3D(vertex_positions=np.asarray(shaded.vertices, np.float32),
+                         triangle_indices=np.asarray(shaded.faces, np.uint32),
+                         vertex_normals=np.asarray(shaded.vertex_normals, np.float32),
+                         albedo_factor=rgba, face_rendering="DoubleSided" if plane else None)
 
     # ---- per frame --------------------------------------------------------
 
@@ -265,12 +287,14 @@ class Recorder:
             self._flush_frames()
 
     def log_text(self, sim_time: float, text: str, level: str = "INFO", path: str = "program/log") -> None:
-        """A line of program output, an error or a cell event, at `sim_time` (sent at once:
-        it is rare)."""
+        """A line of program output, an error or a cell event, at `sim_time`; buffered and
+        sent with the frames (one send_columns per entity, not one log call per line)."""
         if not self.enabled or self._closed:
             return
-        self.rec.set_time(TIMELINE, duration=sim_time)
-        self.rec.log(path, rr.TextLog(text, level=level))
+        times, texts, levels = self._texts.setdefault(path, ([], [], []))
+        times.append(sim_time)
+        texts.append(text)
+        levels.append(level)
 
     def log_image(self, path: str, sim_time: float, rgb: np.ndarray, strips: list[np.ndarray] | None = None,
                   points: np.ndarray | None = None, labels: list[str] | None = None) -> None:
@@ -302,10 +326,17 @@ class Recorder:
             T = Location(*values).matrix()
             T[:3, 3] /= 1000.0
             W = base @ T
-            self.rec.log(f"world/locations/{_part(name)}", rr.Transform3D(
+            self.rec.log(f"world/locations/{entity_part(name)}", rr.Transform3D(
                 translation=W[:3, 3], mat3x3=W[:3, :3]), static=True)
-            self.rec.log(f"world/locations/{_part(name)}", rr.TransformAxes3D(0.05), static=True)
+            self.rec.log(f"world/locations/{entity_part(name)}", rr.TransformAxes3D(0.05), static=True)
         self._tcp_site = cell.gripper.tcp_site
+
+    def log_plan(self, sim_time: float, points: np.ndarray, label: str) -> None:
+        """A motion's planned tool-tip path (world, metres) from `sim_time` on; buffered and
+        sent with the frames."""
+        if not self.enabled or self._closed:
+            return
+        self._plans.append((sim_time, np.asarray(points, np.float32), label))
 
     def log_belt_window(self, name: str, sim_time: float, world_T: np.ndarray, upstream_m: float,
                         downstream_m: float, width_m: float) -> None:
@@ -314,7 +345,7 @@ class Recorder:
         if not self.enabled or self._closed:
             return
         self.rec.set_time(TIMELINE, duration=sim_time)
-        path = f"world/belts/{_part(name)}"
+        path = f"world/belts/{entity_part(name)}"
         self.rec.log(path, rr.Transform3D(translation=world_T[:3, 3], mat3x3=world_T[:3, :3]))
         self.rec.log(f"{path}/window", rr.Boxes3D(
             centers=[[(upstream_m + downstream_m) / 2, 0.0, 0.002]],
@@ -339,20 +370,18 @@ class Recorder:
         if k == 0:
             return
         times = [rr.TimeColumn(TIMELINE, duration=self._t[:k].copy())]
-        quat_xyzw = self._quat[:k][:, :, [1, 2, 3, 0]]
-        for i, b in enumerate(self._moving):
-            # Only the frames where the body's pose changed: a parked or sleeping part costs nothing.
-            pos, quat = self._pos[:k, i], self._quat[:k, i]
-            previous_pos = np.vstack([self._sent_pos[i:i + 1], pos[:-1]])
-            previous_quat = np.vstack([self._sent_quat[i:i + 1], quat[:-1]])
-            changed = np.any(pos != previous_pos, axis=1) | np.any(quat != previous_quat, axis=1)
-            if not changed.any():
-                continue
-            self._sent_pos[i], self._sent_quat[i] = pos[-1], quat[-1]
-            self.rec.send_columns(self._body_paths[b],
-                                  indexes=[rr.TimeColumn(TIMELINE, duration=self._t[:k][changed])],
-                                  columns=rr.Transform3D.columns(translation=pos[changed],
-                                                                 quaternion=quat_xyzw[changed, i]))
+        pos, quat = self._pos[:k], self._quat[:k]
+        # Only the frames where a body's pose changed: a parked or sleeping part costs nothing
+        # (one comparison for all bodies; NaN, never sent, differs from everything).
+        changed = (np.any(pos != np.concatenate([self._sent_pos[None], pos[:-1]]), axis=2)
+                   | np.any(quat != np.concatenate([self._sent_quat[None], quat[:-1]]), axis=2))
+        self._sent_pos[:], self._sent_quat[:] = pos[-1], quat[-1]
+        for i in np.flatnonzero(changed.any(axis=0)):
+            rows = changed[:, i]
+            self.rec.send_columns(self._body_paths[self._moving[i]],
+                                  indexes=[rr.TimeColumn(TIMELINE, duration=self._t[:k][rows])],
+                                  columns=rr.Transform3D.columns(translation=pos[rows, i],
+                                                                 quaternion=quat[rows, i][:, [1, 2, 3, 0]]))
         if self._tcp_site is not None:
             self.rec.send_columns("world/tcp", indexes=times,
                                   columns=rr.Points3D.columns(positions=self._tcp[:k]))
@@ -360,6 +389,24 @@ class Recorder:
         for i, path in enumerate(self._joint_paths):
             self.rec.send_columns(path, indexes=times, columns=rr.Scalars.columns(scalars=q[:, i]))
         self._k = 0
+        self._flush_events()
+
+    def _flush_events(self) -> None:
+        """The text lines and planned paths buffered since the last flush."""
+        for path, (ts, texts, levels) in self._texts.items():
+            if ts:
+                self.rec.send_columns(path, indexes=[rr.TimeColumn(TIMELINE, duration=np.asarray(ts, float))],
+                                      columns=rr.TextLog.columns(text=texts, level=levels))
+                ts.clear()
+                texts.clear()
+                levels.clear()
+        if self._plans:
+            ts, strips, labels = zip(*self._plans)
+            n = len(ts)
+            self.rec.send_columns("world/plan", indexes=[rr.TimeColumn(TIMELINE, duration=np.asarray(ts, float))],
+                                  columns=rr.LineStrips3D.columns(strips=list(strips), labels=list(labels),
+                                                                  colors=[PLAN_COLOUR] * n, radii=[-1.5] * n))
+            self._plans.clear()
 
     def _flush_scalars(self) -> None:
         for name, (ts, vs) in self._scalars.items():
@@ -370,13 +417,20 @@ class Recorder:
                 vs.clear()
         self._scalar_count = 0
 
+    def send_buffered(self) -> None:
+        """Send what is buffered now (a notebook's run stops: its live viewer is up to date)."""
+        if not self.enabled or self._closed:
+            return
+        self._flush_frames()
+        self._flush_events()   # also when no frame was taken since the last flush
+        self._flush_scalars()
+
     def close(self) -> None:
         """Send what is buffered, flush, and finish the .rrd file. Safe to call twice."""
         if self._closed:
             return
         if self.enabled:
-            self._flush_frames()
-            self._flush_scalars()
+            self.send_buffered()
             self.rec.flush()
             self.rec.disconnect()   # closes the file sink: writes the footer
         self._closed = True

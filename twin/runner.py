@@ -272,7 +272,7 @@ def start_program(program: str | Path | list[str | Path], scene: str | Path | No
 
         sim.recorder.log_text(0.0, f"twin run {program} on {scene}")
         sim.recorder.log_cell(sim.cell)
-        sim.trace = ProgramTrace(sim.recorder, started.system)
+        sim.trace = ProgramTrace(sim.recorder, started.system, sim)
     return started
 
 

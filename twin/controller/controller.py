@@ -30,6 +30,7 @@ robot's flange is at ``BASE : location : INVERSE(TOOL)`` in the robot base frame
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -269,6 +270,9 @@ class VirtualController:
         self._plans: dict[tuple, Trajectory] = {}
         self._last_params: MotionParameters | None = None  # of the last motion launched
         self._t0 = cell.time  # simulated time of step 0
+        # Told of each motion planned (its joint samples, straight or not): the recording draws
+        # the planned tool-tip path (twin/program_trace.py).  None: nobody listens.
+        self.on_plan: Callable[[np.ndarray, bool], None] | None = None
 
     # ------------------------------------------------------------ locations
     def _flange_matrix_m(self, location: Location) -> np.ndarray:
@@ -715,6 +719,8 @@ class VirtualController:
         self.history.append(MotionRecord(self._t0 + start * self.dt, self._t0 + motion.end * self.dt,
                                          trajectory.duration, max(overlap_s, 0.0), straight, destination))
         self._motions.append(motion)
+        if self.on_plan is not None and not motion.still and motion.belt is None:
+            self.on_plan(motion.q, straight)
         self._q_planned = motion.q[-1].copy()
         self._destination = destination
         if start > self.step:

@@ -207,7 +207,8 @@ class RobotKinematics:
     """Kinematics of one robot (SI units, robot base frame)."""
 
     def __init__(self, model: pin.Model, flange_frame: str, max_velocity, max_acceleration, name: str = "",
-                 ready=None, payload_kg=None, rail: LinearRail | None = None):
+                 ready=None, payload_kg=None, rail: LinearRail | None = None,
+                 controller_figures: dict[str, np.ndarray] | None = None):
         self.model = model  # the arm's chain (pinocchio); a rail is not in it
         self.data = model.createData()
         self.name = name
@@ -239,6 +240,9 @@ class RobotKinematics:
         # READY: the joints of the robot's READY location (V+ READY), the neutral pose unless given.
         self.ready = np.clip(neutral if ready is None else np.asarray(ready, dtype=float), self.lower, self.upper)
         self.payload_kg = None if payload_kg is None else tuple(float(v) for v in payload_kg)  # rated, maximum
+        # Figures a controller reports about the robot that the planner does not use (the GPL
+        # parameter database's robot type, servo gripper axis, Cartesian references), by name.
+        self.controller_figures: dict[str, np.ndarray] = dict(controller_figures or {})
         if self.max_velocity.shape != (n,) or self.max_acceleration.shape != (n,):
             raise ValueError("max_velocity/max_acceleration need one value per joint")
         if rail is not None:
@@ -256,6 +260,7 @@ class RobotKinematics:
         acceleration limits from the `<numeric>` entries `<model>/max_velocity` and
         `<model>/max_acceleration` (pinocchio does not read them); the READY joints from
         `<model>/ready` and the rated and maximum payload (kg) from `<model>/payload`;
+        `<model>/gpl_*` entries as `controller_figures` (without the prefix);
         `rail`: the linear rail the scene mounts the robot on, if any."""
         path = Path(path)
         model = pin.buildModelFromMJCF(str(path))
@@ -265,8 +270,10 @@ class RobotKinematics:
             amax = numeric[f"{name}/max_acceleration"]
         except KeyError as missing:
             raise ValueError(f"{path}: no <numeric name={missing}> (joint limits for the planner)") from None
+        prefix = f"{name}/gpl_"
+        figures = {key[len(prefix):]: value for key, value in numeric.items() if key.startswith(prefix)}
         return cls(model, flange_site, vmax, amax, name, ready=numeric.get(f"{name}/ready"),
-                   payload_kg=numeric.get(f"{name}/payload"), rail=rail)
+                   payload_kg=numeric.get(f"{name}/payload"), rail=rail, controller_figures=figures)
 
     # ------------------------------------------------------------ forward
     @property

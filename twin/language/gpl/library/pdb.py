@@ -36,22 +36,64 @@ SERVO_EXPERT_COMMANDS = (14000, 14999)  # PDB intro's DataID groups; the TCS bra
 class Entry:
     label: str
     kind: str  # "num", "int", "bool" or "str"
+    count: int  # values in the array (1: a scalar)
     default: Callable[[Any], list]  # rt -> the values at boot
     read_only: bool = False
     robot: bool = False  # a robot parameter (unit = robot number)
+    live: bool = False  # a state, read anew each time (not a setting kept from boot)
     # A value the controller itself holds (rt, values) -> None: writing the DataID sets it
     # there too, and `default` reads it back, so both ways of setting it agree.
     store: Callable[[Any, list], None] | None = None
-    live: bool = False  # `default` reads the controller's state: read afresh each time
 
 
 def _const(*values) -> Callable[[Any], list]:
     return lambda rt: list(values)
 
 
+GRIPPER_AXIS = 5  # a PreciseFlex servo gripper is the controller's axis 5
+
+
+def _figure(rt, name: str, default=None):
+    """A figure of the robot model for the controller (the model's `<model>/gpl_<name>`)."""
+    return rt.robot.kin.controller_figures.get(name, default)
+
+
 def _axes(rt) -> int:
-    from .state import axis_count  # noqa: PLC0415 - state imports numpy arrays of the model
-    return axis_count(rt)
+    """The controller's axes: the twin's joints and a servo gripper's axis 5 (a PF400: 5, on
+    a rail 6, as the field unit's DataID 2000 says)."""
+    from .state import axis_count  # noqa: PLC0415 - as _soft_limits
+    if _figure(rt, "gripper_axis") is None:
+        return axis_count(rt)
+    return max(axis_count(rt), GRIPPER_AXIS)
+
+
+def _per_axis(joint_values: Callable[[Any], np.ndarray], gripper_slot: int) -> Callable[[Any], list]:
+    """One value per controller axis, axis 1 first: the joints' (in GPL units: degrees, mm)
+    and, for a servo gripper, its figure `gripper_axis[gripper_slot]` as axis 5."""
+    def values(rt) -> list:
+        from .state import to_gpl_angles  # noqa: PLC0415 - state imports numpy arrays of the model
+        per_axis = to_gpl_angles(rt, joint_values(rt.robot.kin)) + [0.0] * _axes(rt)
+        gripper = _figure(rt, "gripper_axis")
+        if gripper is not None:
+            per_axis[GRIPPER_AXIS - 1] = float(gripper[gripper_slot])
+        # Rounded to a micro-unit: the model stores radians, the database degrees.
+        return [round(v, 6) for v in per_axis[:_axes(rt)]]
+    return values
+
+
+def _figures(name: str, default: list) -> Callable[[Any], list]:
+    return lambda rt: [float(v) for v in _figure(rt, name, default)]
+
+
+def _cartesian_speed(rt) -> list:
+    """100 % Cartesian speeds: the straight-line speed the twin plans with (the scene's
+    `cartesian_speed_mm_s`), then the model's rotation figures."""
+    return [float(rt.robot.settings.cartesian_speed_mm_s)] + _figures("cartesian_speed", [0.0, 0.0, 0.0])(rt)[1:]
+
+
+def _power_state(rt) -> int:
+    from .robot import power_state  # noqa: PLC0415 - robot imports this module
+    return power_state(rt)
 
 
 def _axis_mask(rt) -> int:
@@ -69,17 +111,16 @@ def _link_lengths(rt) -> list:
     return values
 
 
-def _per_axis(value) -> Callable[[Any], list]:
+def _soft_limits(which: int) -> Callable[[Any], list]:
+    """Joint soft limits in GPL units (degrees, mm) from the robot model, a servo gripper's
+    as axis 5."""
+    if which > 0:
+        return _per_axis(lambda kin: kin.upper, 1)
+    return _per_axis(lambda kin: kin.lower, 0)
+
+
+def _each_axis(value) -> Callable[[Any], list]:
     return lambda rt: [value] * _axes(rt)
-
-
-def _model(attribute: str) -> Callable[[Any], list]:
-    """A per-joint array of the robot model in GPL units (degrees, mm)."""
-    def values(rt) -> list:
-        from .state import to_gpl_angles  # noqa: PLC0415 - state imports numpy arrays of the model
-        # Rounded to a micro-unit: the model stores radians, the database degrees.
-        return [round(v, 6) for v in to_gpl_angles(rt, np.asarray(getattr(rt.robot.kin, attribute)))]
-    return values
 
 
 def _model_number(rt) -> int:
@@ -99,14 +140,6 @@ def _set_test_speed(rt, values: list) -> None:
     if not 0.0 < speed <= 100.0:
         raise codes.fail(codes.VALUE_OUT_OF_RANGE, f"test speed {speed:g} (0 < percent <= 100)")
     rt.robot.set_speed(speed, monitor=True)
-
-
-# System state (DataID 234), Controller.PowerState's numbers (robot.power_state), as the TCP
-# Command Server 3.0 labels them: 7 "Power off - waiting for power request TRUE", 20 "Power on
-# - ready to have GPL attach robot", 21 "GPL project attached to robot".
-def _system_state(rt) -> list:
-    from .robot import power_state  # noqa: PLC0415 - robot imports this module
-    return [power_state(rt)]
 
 
 def _power(rt) -> list:
@@ -144,66 +177,76 @@ def _mounted_tool(rt) -> list:
     return [float(v) for v in np.round(tcp, 3)] + [0.0, 0.0, 0.0]
 
 
-def _robot(label: str, kind: str, default, read_only: bool = False, store=None) -> Entry:
-    return Entry(label, kind, default, read_only, robot=True, store=store)
-
-
-# DataID -> entry (sources in the module docstring).
+# DataID -> entry.  Sources: "manual Lnnn" (gpl-user-manual.txt), "PDB" (the public Parameter
+# Database reference, www2.brooksautomation.com/Controller_Software/Software_Reference/PDB),
+# "Dictionary" (the GPL Dictionary page of Controller.PDb).
 TABLE: dict[int, Entry] = {
-    # System identification and start-up
-    100: Entry("Controller manufacturer", "str", _const("Brooks Automation"), READ_ONLY),  # PDB
-    101: Entry("Controller model", "str", _const("twin"), READ_ONLY),  # PDB
-    103: Entry("Full software version", "str", _const("GPL 4.2 (twin digital twin)"), READ_ONLY),  # PDB
-    104: Entry("Software version", "int", _const(4), READ_ONLY),  # PDB
+    100: Entry("Controller manufacturer", "str", 1, _const("Brooks Automation"), READ_ONLY),  # PDB
+    101: Entry("Controller model", "str", 1, _const("twin"), READ_ONLY),  # PDB
+    102: Entry("Hardware version", "str", 1, _const("twin"), READ_ONLY),  # PyLabRobot DataIDs
+    103: Entry("Full software version", "str", 1, _const("GPL 4.2 (twin digital twin)"), READ_ONLY),  # PDB
+    104: Entry("Software version", "int", 1, _const(4), READ_ONLY),  # PDB
     # 105, 106: the parts of the version after 104's major number, as the TCP Command Server
     # 3.0 encodes it (104 * 1000000 + 105 * 10000 + 106); their PDB labels are not public.
-    105: Entry("Software version, minor", "int", _const(2), READ_ONLY),  # TCS 3.0 Globals
-    106: Entry("Software version, revision", "int", _const(0), READ_ONLY),  # TCS 3.0 Globals
-    111: Entry("Number of robots", "int", _const(1), READ_ONLY),  # TCS 3.0 Cmd_SelectRobot (-1001 beyond it)
-    113: Entry("Controller type", "int", _const(10), READ_ONLY),  # PDB (DataID 102: "10 = Next generation controller")
-    109: Entry("Controller name", "str", _const("twin")),  # .pac controller
-    125: Entry("Serial console enable", "bool", _const(True)),  # manual L2859, .pac controller
-    212: Entry("Auto home at startup", "bool", _const(False)),  # .pac controller; PDB homing setup
-    213: Entry("Home all robots", "int", _const(0), store=_home_all),  # TCS 3.0 Cmd_HomeAll
-    234: Entry("Power state", "int", _system_state, READ_ONLY, live=True),  # PyLabRobot DataIDs; TCS 3.0 SysState
-    240: Entry("Automatic power on", "bool", _const(False)),  # .pac controller
-    241: Entry("Power enable", "bool", _power, store=_set_power),  # Brooks error list (-1600); TCS 3.0 Cmd_Hp
-    262: Entry("Timeout waiting for power to come on in sec", "num", _const(1.0)),  # .pac controller
-    323: Entry("Error log file", "str", _const("")),  # manual L3018, .pac controller
-    424: Entry("Vision server IP address", "str", _const("127.0.0.1")),  # manual L3094
-    601: Entry("System wide test speed in %", "num", _test_speed, store=_set_test_speed),  # Dictionary, .pac
-    # GPL program variables (for web pages and host programs)
-    **{i: Entry("GPL program String", "str", _const("")) for i in range(1800, 1850)},  # .pac gpl_vars
-    **{i: Entry("GPL program variable", "num", _const(0.0)) for i in range(1850, 1870)},  # Dictionary, .pac
-    1890: Entry("GPL program variable array", "num", _const(*[0.0] * 25)),  # .pac gpl_vars
-    1891: Entry("GPL program variable array", "num", _const(*[0.0] * 25)),  # .pac gpl_vars
-    1892: Entry("GPL program NVRAM variable array", "int", _const(*[0] * 8)),  # manual L3034
-    # Robot configuration
-    2000: _robot("Number of axes", "int", lambda rt: [_axes(rt)], READ_ONLY),  # PDB
-    2002: _robot("Robot Name", "str", _const("Robot 1")),  # PDB
-    2003: _robot("Axis Mask", "int", lambda rt: [_axis_mask(rt)], READ_ONLY),  # PDB
-    2007: _robot("Robot model number or version", "int", lambda rt: [_model_number(rt)], READ_ONLY),  # .pac robot
-    # Speeds and accelerations: the robot model's limits, which the planner uses
-    2700: _robot("100% joint speeds in (mm or deg)/sec", "num", _model("max_velocity"), READ_ONLY),  # .pac robot
-    2702: _robot("100% joint accels in (mm or deg)/sec^2", "num", _model("max_acceleration"),
-                 READ_ONLY),  # .pac robot
-    # Homing (stored: the twin's homing is instantaneous, its encoders absolute)
-    2800: Entry("Robot homed", "bool", lambda rt: [robot_state(rt).homed], READ_ONLY, robot=True,
+    105: Entry("Software version, minor", "int", 1, _const(2), READ_ONLY),  # TCS 3.0 Globals
+    106: Entry("Software version, revision", "int", 1, _const(0), READ_ONLY),  # TCS 3.0 Globals
+    109: Entry("Controller name", "str", 1, _const("twin")),  # .pac controller
+    110: Entry("Controller serial number", "str", 1, _const("TWIN-C0001"), READ_ONLY),  # PyLabRobot DataIDs
+    111: Entry("Number of robots", "int", 1, _const(1), READ_ONLY),  # TCS 3.0 Cmd_SelectRobot (-1001 beyond it)
+    113: Entry("Controller type", "int", 1, _const(10), READ_ONLY),  # PDB (DataID 102: "10 = Next generation controller")
+    116: Entry("Robot type", "int", 1, lambda rt: [int(_figure(rt, "robot_type", [0])[0])], READ_ONLY),  # PyLabRobot
+    125: Entry("Serial console enable", "bool", 1, _const(True)),  # manual L2859, .pac controller
+    212: Entry("Auto home at startup", "bool", 1, _const(False)),  # .pac controller; PDB homing setup
+    213: Entry("Home all robots", "int", 1, _const(0), store=_home_all),  # TCS 3.0 Cmd_HomeAll
+    240: Entry("Automatic power on", "bool", 1, _const(False)),  # .pac controller
+    241: Entry("Power enable", "bool", 1, _power, store=_set_power),  # Brooks error list (-1600); TCS 3.0 Cmd_Hp
+    262: Entry("Timeout waiting for power to come on in sec", "num", 1, _const(1.0)),  # .pac controller
+    323: Entry("Error log file", "str", 1, _const("")),  # manual L3018
+    424: Entry("Vision server IP address", "str", 1, _const("127.0.0.1")),  # manual L3094
+    601: Entry("System wide test speed in %", "num", 1, _test_speed, store=_set_test_speed),  # Dictionary, .pac
+    **{i: Entry("GPL program String", "str", 1, _const("")) for i in range(1800, 1850)},  # .pac gpl_vars
+    **{i: Entry(f"GPL program variable {i - 1849}", "num", 1, _const(0.0)) for i in range(1850, 1870)},  # Dictionary
+    1890: Entry("GPL program variable array", "num", 25, _const(*[0.0] * 25)),  # .pac gpl_vars
+    1891: Entry("GPL program variable array", "num", 25, _const(*[0.0] * 25)),  # .pac gpl_vars
+    1892: Entry("GPL program NVRAM variable array", "int", 8, _const(*[0] * 8)),  # manual L3034
+    234: Entry("Power state", "int", 1, lambda rt: [_power_state(rt)], READ_ONLY, live=True),  # PyLabRobot DataIDs
+    2000: Entry("Number of axes", "int", 1, lambda rt: [_axes(rt)], READ_ONLY, robot=True),  # PDB
+    2002: Entry("Robot Name", "str", 1, _const("Robot 1"), robot=True),  # PDB
+    2003: Entry("Axis Mask", "int", 1, lambda rt: [_axis_mask(rt)], READ_ONLY, robot=True),  # PDB
+    2007: Entry("Robot model number or version", "int", 1, lambda rt: [_model_number(rt)], READ_ONLY,
+                robot=True),  # .pac robot
+    2004: Entry("Number of extra, non-servoed, axes", "int", 1, _const(0), READ_ONLY, robot=True),  # robot01.pac
+    # The motion references (robot01.pac): per axis, 100 % speeds and accelerations (mm, deg).
+    2700: Entry("100% joint speeds", "num", 0, _per_axis(lambda kin: kin.max_velocity, 2), READ_ONLY, robot=True),
+    2701: Entry("100% Cartesian speeds", "num", 3, _cartesian_speed, READ_ONLY, robot=True),
+    2702: Entry("100% joint accels", "num", 0, _per_axis(lambda kin: kin.max_acceleration, 3), READ_ONLY, robot=True),
+    2703: Entry("100% Cartesian accels", "num", 3, _figures("cartesian_accel", [0.0, 0.0, 0.0]), READ_ONLY,
+                robot=True),
+    **{dataid: Entry(label, "num", 1, lambda rt, i=i: [_figures("max_percent", [100.0] * 3)(rt)[i]], READ_ONLY,
+                     robot=True)
+       for i, (dataid, label) in enumerate([(2704, "Max %speed allowed"), (2705, "Max %accel allowed"),
+                                            (2706, "Max %decel allowed")])},
+    2800: Entry("Robot homed", "bool", 1, lambda rt: [robot_state(rt).homed], READ_ONLY, robot=True,
                 live=True),  # PyLabRobot DataIDs; the AD-SDL PF400 driver reads it
-    2801: _robot("Robot homed DOUT", "int", _const(0)),  # .pac robot
-    2802: _robot("Homing sequence", "int", _const(2)),  # .pac robot
-    2803: _robot("Homing method", "int", _per_axis(-9)),  # .pac robot
-    2810: _robot("Homing order", "int", lambda rt: list(range(1, _axes(rt) + 1)) + [0] * (12 - _axes(rt))),  # .pac
-    2813: _robot("Timeout on home axis, sec", "num", _const(0.0)),  # .pac robot
-    # Calibration
-    16000: _robot("Robot serial number", "str", _const("TWIN-0001")),  # PDB
-    16050: _robot("Kinematic dimensional constants", "num", _link_lengths, READ_ONLY),  # PDB, .pac calib
-    16051: _robot("Tool set at restart", "num", _mounted_tool),  # PDB; the cell's gripper
-    16052: _robot("Base set at restart", "num", _const(*[0.0] * 6)),  # PDB
-    16066: _robot("Dynamic feedforward enable", "bool", _const(False)),  # .pac calib (the twin has no DFF)
-    16071: _robot("Dynamic feedforward default %payload", "num", _const(0.0)),  # .pac calib; Robot.Payload
-    16077: _robot("Joint max soft stop limit", "num", _model("upper"), READ_ONLY),  # Dictionary, .pac calib
-    16078: _robot("Joint min soft stop limit", "num", _model("lower"), READ_ONLY),  # .pac calib
+    # Homing (stored: the twin's homing is instantaneous, its encoders absolute)
+    2801: Entry("Robot homed DOUT", "int", 1, _const(0), robot=True),  # .pac robot
+    2802: Entry("Homing sequence", "int", 1, _const(2), robot=True),  # .pac robot
+    2803: Entry("Homing method", "int", 0, _each_axis(-9), robot=True),  # .pac robot
+    2810: Entry("Homing order", "int", 12, lambda rt: list(range(1, _axes(rt) + 1)) + [0] * (12 - _axes(rt)),
+                robot=True),  # .pac robot
+    2813: Entry("Timeout on home axis, sec", "num", 1, _const(0.0), robot=True),  # .pac robot
+    16000: Entry("Robot serial number", "str", 1, _const("TWIN-0001"), robot=True),  # PDB
+    16050: Entry("Kinematic dimensional constants", "num", 16, _link_lengths, READ_ONLY, robot=True),  # PDB
+    16051: Entry("Tool set at restart", "num", 6, _mounted_tool, robot=True),  # PDB; the cell's gripper
+    16052: Entry("Base set at restart", "num", 6, _const(*[0.0] * 6), robot=True),  # PDB
+    16066: Entry("Dynamic feedforward enable", "bool", 1, _const(False), robot=True),  # .pac calib (no DFF)
+    16071: Entry("Dynamic feedforward default %payload", "num", 1, _const(0.0), robot=True),  # .pac; Robot.Payload
+    # The twin's joints stop at one range: its hard stops are its soft limits (a field PF400's are
+    # 1-2 units wider, calib01.pac).
+    16075: Entry("Joint maximum hard stop limits", "num", 0, _soft_limits(+1), READ_ONLY, robot=True),  # calib01.pac
+    16076: Entry("Joint minimum hard stop limits", "num", 0, _soft_limits(-1), READ_ONLY, robot=True),  # calib01.pac
+    16077: Entry("Joint maximum soft stop limits", "num", 0, _soft_limits(+1), READ_ONLY, robot=True),  # Dictionary
+    16078: Entry("Joint minimum soft stop limits", "num", 0, _soft_limits(-1), READ_ONLY, robot=True),  # Dictionary
 }
 
 _CONVERT = {"num": number, "int": integer, "bool": lambda v: number(v) != 0, "str": text}
