@@ -793,7 +793,7 @@ def test_pdb_robot_model_number_of_the_pf400(tmp_path):
         Console.WriteLine(CStr(Controller.PdbNum(2007, 1, 0, 0)) & " " & Controller.PDb(2000))
 """), scene=scene, max_sim_time=5.0).report
     assert report.errors == []
-    assert report.output.splitlines() == ["400 4"]  # the twin models the arm's 4 axes (its gripper apart)
+    assert report.output.splitlines() == ["400 5"]  # the servo gripper is axis 5, as on a PF400
 
 
 def test_system_state_power_and_homing_dataids_and_traj_state(tmp_path):
