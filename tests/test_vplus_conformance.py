@@ -333,7 +333,9 @@ def test_the_deepest_ev_plus_stack_is_reached_without_a_python_error():
                                        # bus memory of other processor boards, third-party I/O boards
                                        "IOPUTB ^H1000, 0 = 5", 'IOPUTS ^H1000, 0 = "ab"', "x = IOGETW(^H1000, 1)",
                                        "$s = $IOGETS(^H1000, 0, 4)", "x = IOTAS(^H1000, 0)",
-                                       "DEF.DIO 1 = ^H2000, 1"])
+                                       "DEF.DIO 1 = ^H2000, 1",
+                                       # the arm's own latch, block-command devices
+                                       "SET l = LATCH(1)", "SET #p = #PLATCH(1)", "DEVICES (0, 0, st) 1 = 5"])
 def test_keywords_of_absent_features_load_and_stop_with_device_not_ready(statement):
     # Issue #10: a field program loads and runs as far as the cell allows, with a clear
     # message where a device is absent (docs/vplus.md, "Absent hardware").

@@ -405,7 +405,7 @@ def test_a_command_program_that_loads_a_file_the_run_lacks_stops_there():
     assert "name this one on its command line" in str(task.error)
 
 
-def test_a_malformed_monitor_command_is_a_located_syntax_error():
+def test_a_malformed_monitor_command_is_a_located_error():
     from twin.errors import ProgramError
     from twin.language.vplus.parser import parse
 
@@ -415,3 +415,27 @@ def test_a_malformed_monitor_command_is_a_located_syntax_error():
         assert err.code == msg.SYNTAX_ERROR and err.line == 2 and "monitor command" in str(err)
     else:
         raise AssertionError("no error")
+    # "MC" and nothing else (blanks, a comment) is MCS abbreviated, absent like MCS
+    for line in ("MC ", "MC \t", "MC   ; nothing"):
+        system, task = run_vplus(f'.PROGRAM auto()\n    TYPE "a"\n    {line}\n.END\n')
+        assert task.error.code == msg.DEVICE_NOT_READY and task.error.line == 3 and system.console.output == "a\n"
+
+
+# ------------------------------------------------------- device error variables
+def test_the_error_variable_of_setdevice_and_device_receives_the_status(tmp_path):
+    # [001] "Using DEVICE and SETDEVICE": SETDEVICE (0, unit, error, command) and
+    # DEVICE(0, unit, error, select) name a variable for the device's error status, which
+    # a program does not set beforehand; the twin's encoders report no error (0).
+    program = tmp_path / "enc.pg"
+    program.write_text("""
+.PROGRAM enc()
+    SETDEVICE (0, 0, err, 0)
+    SETDEVICE (0, 0, err, 8) 0.5
+    TYPE "setdevice ", err
+    x = DEVICE(0, 0, status[1], 1)
+    TYPE "device ", status[1], " ", DEFINED(x)
+.END
+""")
+    result = run_program(program, scene="scenes/scara_conveyor.toml", max_sim_time=1)
+    assert result.report.output == "setdevice 0\ndevice 0 -1\n"
+    assert [e["code"] for e in result.report.errors] == [None]  # only the time limit

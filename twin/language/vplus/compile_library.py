@@ -45,6 +45,13 @@ def _calls(node, name: str):
             yield from _calls(getattr(node, f.name), name)
 
 
+# Device keywords whose argument at this position is a variable that receives the
+# device's error status ([001] "Using DEVICE and SETDEVICE": SETDEVICE (0, unit, error,
+# command), DEVICE(0, unit, error, select)): it may be undefined before, and gets 0 (no
+# error: the twin's encoders never fail) when the keyword has done its work.
+ERROR_OUTPUT = {"SETDEVICE": 2, "DEVICES": 2, "DEVICE": 2}
+
+
 class LibraryStatements:
     # ------------------------------------------------------------ statements
     def s_IoStatement(self, s: ast.IoStatement, depth: int) -> None:
@@ -52,6 +59,9 @@ class LibraryStatements:
         if spec is None:
             raise self.error(s, msg.UNKNOWN_KEYWORD, s.name)
         unit = ["None" if a is None else self.expr(a) for a in s.unit]
+        error_var = self.error_output(s.name, s.unit)
+        if error_var is not None:
+            unit[ERROR_OUTPUT[s.name]] = self.peek(error_var)
         unit_var = s.unit[0] if s.unit and isinstance(s.unit[0], ast.Var) else None
         if spec.returns_unit and unit_var is not None:
             unit[0] = self.peek(unit_var)
@@ -77,6 +87,16 @@ class LibraryStatements:
         if spec.returns_unit and unit_var is not None:
             self.emit(depth, f"if {result} is not None:")
             self.assign(unit_var, result, depth + 1)
+        if error_var is not None:
+            self.assign(error_var, "0.0", depth)
+
+    def error_output(self, name: str, args: list) -> ast.Var | None:
+        """The variable that receives a device keyword's error status, if one is given."""
+        position = ERROR_OUTPUT.get(name)
+        if position is None or len(args) <= position:
+            return None
+        var = args[position]
+        return var if isinstance(var, ast.Var) and var.indices != [] and not self.reserved(var) else None
 
     def io_item(self, item) -> str:
         """A TYPE, WRITE or $ENCODE item: an expression or a format specifier."""
@@ -141,7 +161,7 @@ class LibraryStatements:
             if mode is None or (isinstance(mode, ast.Num) and not math.floor(mode.value + 0.5) & 1):
                 self.emit(depth, wait)
             elif not isinstance(mode, ast.Num):
-                self.emit(depth, f"if not _ix({self.checked(mode, '_real', 'GETC')}) & 1:")
+                self.emit(depth, f"if not _no_wait({self.checked(mode, '_real', 'GETC')}):")
                 self.emit(depth + 1, wait)
 
     # ----------------------------------------------------------- references

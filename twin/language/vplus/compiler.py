@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 from ...errors import ProgramError
 from . import ast
 from . import messages as msg
-from .compile_library import LIBRARY_CALLS, LibraryStatements
+from .compile_library import ERROR_OUTPUT, LIBRARY_CALLS, LibraryStatements
 from .keywords import FUNCTIONS, INSTRUCTIONS, STRING_FUNCTIONS, argument_check, arity, called_bare
 from .values import single
 from .parser import normalize_name
@@ -448,6 +448,13 @@ class ProgramCompiler(LibraryStatements):
             raise self.error(self.current, msg.UNDEFINED_PROGRAM, e.name)
         fewest, most = arity(table[e.name])
         self.argument_count(e.name, e.args, fewest, most)
+        error_var = self.error_output(e.name, e.args)
+        if error_var is not None:  # DEVICE(0, unit, error, select): `error` receives the status
+            args = ", ".join(self.peek(a) if i == ERROR_OUTPUT[e.name]
+                             else self.checked(a, argument_check(table[e.name], i), e.name)
+                             for i, a in enumerate(e.args))
+            result = self.fresh("dev")
+            return f"({result} := F[{e.name!r}](rt, {args}), {self.assign_expr(error_var, '0.0')})[0]"
         args = self.checked_arguments(e.name, table[e.name], e.args)
         return f"F[{e.name!r}](rt{', ' if args else ''}{args})"
 

@@ -216,6 +216,11 @@ def _defined_element(table: dict, key: str, index) -> float:
     return TRUE if array is not None and index in array else FALSE
 
 
+def _no_wait(mode) -> bool:
+    """GETC's and READ's mode: bit 1 (value 1) is no-wait."""
+    return bool(to_int(mode) & 1)
+
+
 def _element_or_none(table: dict, key: str, index):
     """An array element passed to CALL by reference: its value, or None while
     it (or its array) is undefined, which the callee sees as undefined."""

@@ -27,6 +27,7 @@ ABSENT_INSTRUCTIONS = {
     # digital I/O boards: the cell's controller is a single CPU with its own I/O only.
     **{f"IOPUT{kind}": "no bus memory of other processor boards (IOPUT_)" for kind in "BWLFDS"},
     "DEF.DIO": "no third-party digital I/O board (DEF.DIO)",
+    "DEVICES": "no device takes block commands (DEVICES)",
 }
 ABSENT_FUNCTIONS = {
     "TIME": "no calendar clock in the packed TIME() form ($TIME gives the simulated clock)",
@@ -34,6 +35,10 @@ ABSENT_FUNCTIONS = {
     **{f"IOGET{kind}": "no bus memory of other processor boards (IOGET_)" for kind in "BWLFD"},
     "$IOGETS": "no bus memory of other processor boards ($IOGETS)",
     "IOTAS": "no bus memory of other processor boards (IOTAS)",
+    # The arm's own position latch: no latch input is wired to its encoders
+    # (LATCHED(robot) is 0), so there is no latched location to return.
+    "LATCH": "no latch input on the arm's encoders (LATCH)",
+    "#PLATCH": "no latch input on the arm's encoders (#PLATCH)",
 }
 
 
