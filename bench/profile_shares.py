@@ -62,7 +62,7 @@ def main() -> None:
     mujoco.mj_step = mj_step
     timed(Simulation, "advance", "run")
     timed(Scheduler, "run_cycle", "scheduler (interpreters, planning)")
-    timed(VirtualController, "servo_step", "servo update (per step)")
+    timed(VirtualController, "servo_chunk", "servo references (per chunk)")
     timed(Simulation, "_record", "recording, signals")
     checked = {type(c) for c in Simulation(SCENE).cell._checked}
     for kind in sorted(checked, key=lambda k: k.__name__):

@@ -245,31 +245,44 @@ def test_tool_transformation_moves_the_tool_tip_to_the_location():
     assert np.allclose(here.position(), low.position(), atol=0.05)
 
 
+def _servo_references(monkeypatch) -> list[tuple[float, np.ndarray, np.ndarray | None]]:
+    """Every servo reference the cell gets, as (time s, qd, qdd): one step's through
+    `set_servo`, a chunk of steps' through `servo_feed` (one row a step)."""
+    from twin.physics.cell import Cell
+
+    references = []
+    set_servo, servo_feed = Cell.set_servo, Cell.servo_feed
+
+    def one(self, q, qd, qdd=None):
+        references.append((self.time, np.array(qd), None if qdd is None else np.array(qdd)))
+        set_servo(self, q, qd, qdd)
+
+    def rows(self, q, qd, qdd):
+        references.extend((self.time + j * self.timestep, np.array(qd[j]), np.array(qdd[j])) for j in range(len(q)))
+        return servo_feed(self, q, qd, qdd)
+
+    monkeypatch.setattr(Cell, "set_servo", one)
+    monkeypatch.setattr(Cell, "servo_feed", rows)
+    return references
+
+
 def test_duration_lowers_the_speed_and_keeps_the_accelerations(monkeypatch):
     """DURATION slows a motion down as a lower speed would ("the motion is slowed", V+
     Language Reference, DURATION): it lasts the given time, and its joints accelerate as
     hard as without DURATION (a uniform slow-down of a 0.3 s motion to 1.5 s would cut the
     accelerations 25-fold)."""
-    from twin.physics.cell import Cell
-
-    samples = []
-    original = Cell.set_servo
-
-    def recording(self, q, qd, qdd=None):
-        if qdd is not None:  # the largest acceleration, as a fraction of the joint's maximum
-            samples.append((self.time, float(np.max(np.abs(qdd) / self.kinematics.max_acceleration))))
-        original(self, q, qd, qdd)
-
-    monkeypatch.setattr(Cell, "set_servo", recording)
+    references = _servo_references(monkeypatch)
     durations, peaks = [], []
     for prefix in ([], ["DURATION 1.5"]):
-        samples.clear()
+        references.clear()
         sim, _, outcome, _ = run_on_cell(_program("MOVE a", "BREAK", *prefix, "MOVE b", "BREAK"),
                                          locations={"a": A, "b": B})
         assert outcome.errors == []
         move = sim.controller.history[1]
         durations.append(move.duration_s)
-        peaks.append(max(ratio for t, ratio in samples if move.start_s <= t <= move.end_s))
+        kin = sim.kinematics  # the largest acceleration, as a fraction of the joint's maximum
+        peaks.append(max(float(np.max(np.abs(qdd) / kin.max_acceleration))
+                         for t, _, qdd in references if qdd is not None and move.start_s <= t <= move.end_s))
     assert durations[0] < 0.5 and durations[1] == pytest.approx(1.5)
     assert peaks[1] == pytest.approx(peaks[0], rel=0.1) and peaks[0] > 0.9
 
@@ -484,28 +497,48 @@ def test_brake_stops_the_robot_on_its_path():
     assert np.linalg.norm(sim.controller.destination().position() - here) < 0.05  # DEST: where it stopped
 
 
+def test_references_fed_in_chunks_are_those_of_step_by_step_feeding(monkeypatch):
+    """The run loop feeds a cycle's servo references in chunks (`servo_chunk`, computed with
+    numpy); they are the references `servo_step` gives one step at a time, blends, DELAY
+    and the hand's actions at motion starts included, and the robot ends where it did."""
+    from twin.controller.controller import VirtualController
+
+    text = _program("APPRO a, 50", "MOVES a", "CLOSEI", "DEPARTS 50", "APPRO b, 50", "MOVE b", "DELAY 0.1",
+                    "OPENI", "DEPART 50", "MOVE a", "BREAK")
+    runs = []
+    for stepwise in (False, True):
+        with monkeypatch.context() as patch:
+            references = _servo_references(patch)
+            if stepwise:
+                patch.setattr(VirtualController, "servo_chunk", lambda self, limit: (self.servo_step(), (1, None))[1])
+            sim, _, outcome, _ = run_on_cell(text, locations={"a": A, "b": B})
+        assert outcome.errors == []
+        runs.append((references, sim.cell.robot_qpos(), [m.start_s for m in sim.controller.history],
+                     [(e["t"], e["kind"]) for e in sim.cell.events]))
+    (chunked, q_chunked, starts_chunked, events_chunked), (stepped, q_stepped, starts_stepped, events_stepped) = runs
+    assert len(chunked) > 300
+    # Standing still a chunk gets one reference (DELAY) or none; moving, every step gets its own.
+    moving = [(t, qd) for t, qd, _ in stepped if np.any(qd)]
+    fed = {round(t, 6): qd for t, qd, _ in chunked}
+    assert len(moving) > 300 and all(np.array_equal(fed[round(t, 6)], qd) for t, qd in moving)
+    assert starts_chunked == starts_stepped and events_chunked == events_stepped
+    assert np.allclose(q_chunked, q_stepped, atol=1e-6)
+
+
 def test_blended_motions_stay_within_the_joint_speed_and_acceleration_limits(monkeypatch):
     """Continuous path rounds a corner only as much as the joint limits allow (V+ Operating
     System Reference, SPEED monitor command: the path is "rounded" near intermediate
     destinations "to prevent excessive accelerations"): every reference the servos get is
     within each joint's maximum speed and acceleration; a joint that reverses (down to a,
     straight back up) gets no overlap at all."""
-    from twin.physics.cell import Cell
-
-    references = []
-    original = Cell.set_servo
-
-    def recording(self, q, qd, qdd=None):
-        references.append((np.array(qd), None if qdd is None else np.array(qdd)))
-        original(self, q, qd, qdd)
-
-    monkeypatch.setattr(Cell, "set_servo", recording)
+    references = _servo_references(monkeypatch)
     text = _program("APPRO a, 50", "MOVES a", "DEPARTS 50", "APPRO b, 50", "MOVE b", "DEPART 50", "MOVE a", "BREAK")
     sim, _, outcome, _ = run_on_cell(text, locations={"a": A, "b": B})
     assert outcome.errors == []
     kin = sim.kinematics
-    qd = np.array([r[0] for r in references])
-    qdd = np.array([r[1] for r in references if r[1] is not None])
+    qd = np.array([r[1] for r in references])
+    qdd = np.array([r[2] for r in references if r[2] is not None])
+    assert len(qd) > 300  # every step of the program's motions (0.8 s)
     assert np.all(np.abs(qd) <= kin.max_velocity * 1.03)
     assert np.all(np.abs(qdd) <= kin.max_acceleration * 1.03)
     overlaps = [m.overlap_s for m in sim.controller.history]

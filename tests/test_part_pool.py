@@ -18,7 +18,8 @@ def _cell(tmp_path, pool: int) -> Cell:
 
 def test_a_huge_feeder_pool_builds_a_bounded_number_of_bodies(tmp_path):
     assert _cell(tmp_path, 2000).parts.size == MAX_RECYCLED_BODIES
-    assert _cell(tmp_path, 120).parts.size == 120  # the demo's pool as asked
+    assert _cell(tmp_path, 120).parts.size == MAX_RECYCLED_BODIES  # the demo's pool
+    assert _cell(tmp_path, 5).parts.size == 5  # a smaller pool as asked
 
 
 def test_recycled_bodies_keep_every_parts_report_entry(tmp_path):

@@ -90,7 +90,7 @@ def test_parked_parts_are_sent_once(recorded):
     presented = {p["id"] for p in result.report.parts}
     parked = [p for p in rrd if p.startswith("/world/part_") and p.count("/") == 2
               and int(p.rsplit("_", 1)[1]) not in presented]
-    assert len(parked) > 50
+    assert len(parked) > 20  # of the pool's 24 bodies (MAX_RECYCLED_BODIES), all but the few presented
     for entity in parked:
         rows = sum(len(cols["sim_time"]) for static, cols in rrd[entity] if not static)
         assert rows == 1, entity

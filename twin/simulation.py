@@ -1,8 +1,9 @@
 """A cell, its controller and the programs running on it, stepped together.
 
 The pipeline, once per major cycle (16 ms, the V+ scheduler's cycle):
-  tasks run until they wait (scheduler) -> the controller feeds the servos
-  each physics step -> the cell steps MuJoCo (grippers, feeder, belt) ->
+  tasks run until they wait (scheduler) -> the controller computes the servo
+  references of the cycle's physics steps (in chunks between motion starts) -> the
+  cell steps MuJoCo, feeding them each step (grippers, feeder, belt) ->
   the recorder samples a frame when one is due.
 Simulated time drives everything; nothing waits on the wall clock.
 """
@@ -154,9 +155,10 @@ class Simulation:
             self.program_end = self.program_end if self.program_end is not None else cell.time
             self.finished = True
             return
-        for _ in range(steps):
-            controller.servo_step()
-            cell.step(1)
+        while steps > 0:  # in chunks: MuJoCo steps as many as it can in one call
+            k, feed = controller.servo_chunk(steps)
+            cell.step(k, feed)
+            steps -= k
         collisions = cell.take_collisions()
         if collisions and not self._crashed:  # the first one stops everything; all are events
             self._crashed = True

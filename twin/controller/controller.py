@@ -32,6 +32,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 
@@ -853,6 +854,52 @@ class VirtualController:
                 self._arrived(done)
         if not motions and self.tracking is None:
             self.q_command = self._anchor.copy()
+
+    def servo_chunk(self, limit: int) -> tuple[int, "Callable[[int], None] | None"]:
+        """Command the next physics steps in one go, up to `limit` of them: returns how many,
+        and the function the cell calls before each of those steps (0-based) to feed its
+        servo references, or None when they do not change over the steps (standing still),
+        so MuJoCo steps them in one call.  The references are those `servo_step` gives,
+        computed for the whole chunk with numpy; the inertia feed-forward uses the mass
+        matrix at the chunk's start (docs/performance.md).  A chunk ends where a motion
+        begins (its hand action happens at that step).  Motions on or to a belt, tracking
+        and encoders to sample are fed one step at a time by `servo_step`."""
+        motions = self._motions
+        if self.tracking is not None or self.belts.encoders or any(m.belt is not None for m in motions):
+            self.servo_step()
+            return 1, None
+        n = self.step
+        k = min([limit] + [m.start - n for m in motions if m.start > n])
+        for m in motions:
+            if m.start == n and not m.started:
+                m.started = True
+                if m.hand is not None:
+                    self.hand(m.hand)
+        active = [m for m in motions if m.start <= n]
+        self.step = n + k
+        last = n + k - 1
+        feed = None
+        if active and not all(m.still for m in active):
+            q, qd, qdd = self._anchor, None, None
+            for m in active:
+                a, b = n - m.start, last - m.start + 1
+                rows = slice(a, b) if b <= m.last + 1 else np.minimum(np.arange(a, b), m.last)
+                if qd is None:
+                    q, qd, qdd = q + m.delta[rows], m.qd[rows], m.qdd[rows]
+                else:
+                    q, qd, qdd = q + m.delta[rows], qd + m.qd[rows], qdd + m.qdd[rows]
+            self.q_command = q[-1]
+            feed = self.cell.servo_feed(q, qd, qdd)
+        elif active:  # standing still on the timeline (DELAY): one reference for the chunk
+            q = self._anchor + sum((m.delta[0] for m in active), np.zeros_like(self._anchor))
+            self.q_command = q
+            self.cell.set_servo(q, np.zeros_like(q), np.zeros_like(q))
+        while motions and motions[0].end <= last:
+            done = motions.pop(0)
+            self._anchor = self._anchor + done.delta[-1]
+        if not motions:
+            self.q_command = self._anchor.copy()
+        return k, feed
 
     def _belt_reference(self, motion: _Motion, k: int, q, qd):
         """The planned reference of a belt motion moved with its belts; a window violation

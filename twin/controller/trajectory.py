@@ -189,6 +189,7 @@ def accel_bounds(dq: np.ndarray, amax: np.ndarray, accel: float = 1.0, decel: fl
     return np.column_stack([-down, up])
 
 
+@functools.cache
 def _grid(n: int) -> np.ndarray:
     """toppra grid on the path parameter's [0, 1]: `n` points closer together near both
     ends, where a motion speeds up and slows down (a short acceleration phase spread over
@@ -198,7 +199,9 @@ def _grid(n: int) -> np.ndarray:
     acceleration).  A straight line's waypoints need no grid points of their own (the
     durations do not change)."""
     u = np.concatenate([0.5 * (1.0 - np.cos(np.linspace(0.0, math.pi, n))), END_FRACTIONS, 1.0 - END_FRACTIONS])
-    return np.unique(u)
+    grid = np.unique(u)
+    grid.flags.writeable = False  # shared by every plan
+    return grid
 
 
 def _accel_signs(t: np.ndarray, a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -138,7 +138,9 @@ class Cell:
         self._check_steps = max(1, round(self.config.physics.check_interval / self.timestep))
         self._steps_to_check = 1
         # Check order: the gripper first (grasps), the scene's components, collisions, parts.
-        self._checked = [self.gripper, *self.components[2:], self.robot, self.parts]
+        # Components without a check of their own (a table, a bin) are not called.
+        self._checked = [c for c in (self.gripper, *self.components[2:], self.robot, self.parts)
+                         if type(c).check is not Component.check]
         self._busy = [c for c in self._checked if type(c).busy is not Component.busy]
         self.robot.home(self.config.locations[self.config.robot.home])
         mujoco.mj_forward(m, d)
@@ -165,6 +167,11 @@ class Cell:
         given, acceleration feed-forward (rad/s^2, m/s^2): the drives add the torque M(q) qdd
         that the planned acceleration needs, as a servo with inertia feed-forward does."""
         self.robot.set_servo(q, qd, qdd)
+
+    def servo_feed(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray):
+        """Servo references for several steps (one row each): the function `step` takes as
+        its `feed` (`Robot.servo_feed`)."""
+        return self.robot.servo_feed(q, qd, qdd)
 
     def set_gripper(self, closed: bool) -> None:
         """The hand: fingers closed/open, or a suction cup's vacuum on/off. Letting go
@@ -203,13 +210,22 @@ class Cell:
             self.parts.mark_missed(body, cause)
 
     # ------------------------------------------------------------------ stepping
-    def step(self, n: int = 1) -> None:
+    def step(self, n: int = 1, feed=None) -> None:
         """Advance physics by n steps; the components' checks run every check interval
-        (every step while one is busy)."""
+        (every step while one is busy).  `feed(j)`, when given, is called before the j-th
+        (0-based) of the n steps: the servo references of that step (`servo_feed`);
+        without it MuJoCo runs the steps between two checks in one call."""
         m, d = self.model, self.data
+        j = 0
         while n > 0:
             k = min(n, self._steps_to_check)
-            mujoco.mj_step(m, d, k)
+            if feed is None:
+                mujoco.mj_step(m, d, k)
+            else:
+                for row in range(j, j + k):
+                    feed(row)
+                    mujoco.mj_step(m, d)
+                j += k
             n -= k
             self._steps_to_check -= k
             if self._steps_to_check <= 0:

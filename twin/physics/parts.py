@@ -21,17 +21,18 @@ from __future__ import annotations
 import numpy as np
 import mujoco
 
-from .components.base import FINISHED, LIVE, PARKED, RETIRED, CellContext, Component
+from .components.base import (FINISHED, HELD_CONAFFINITY, HELD_CONTYPE, LIVE, LIVE_CONAFFINITY, LIVE_CONTYPE,
+                              PARKED, RETIRED, RETIRED_CONAFFINITY, RETIRED_CONTYPE, CellContext, Component)
 from .geometry import MM
 from .scene import resolve
 
 PARK_Z = -0.5  # m: pooled parts wait under the floor, contacts off, gravity compensated
 FLOOR_CHECK_S = 0.1  # s between checks for parts on the floor / at rest in a bin or tray
-# Contact bits: static cell + robot geoms use 1/1. Live parts collide with both bits; parts
-# retired at rest in a bin or tray (type 2, affinity 0) touch only live parts.
-LIVE_CONTYPE, LIVE_CONAFFINITY = 1, 3
-RETIRED_CONTYPE, RETIRED_CONAFFINITY = 2, 0
-RETIRE_SPEED = 2e-3  # m/s and rad/s: a part in a bin slower than this ...
+# A part in a bin slower than this (m/s, and rad/s) ... MuJoCo's soft friction lets a part
+# on a sloping heap creep at a few mm/s and turn at a few hundredths of a rad/s for tens of
+# seconds (measured in the demo's bin: up to 14 such parts awake at once, 3 mm/s, 0.08 rad/s,
+# doubling the cost of every step); at these speeds a part in a bin has come to rest.
+RETIRE_SPEED, RETIRE_SPIN = 5e-3, 0.1
 RETIRE_CHECKS = 3  # ... at this many floor checks in a row (0.1 s apart) retires
 RETIRED_DAMPING = (1e5, 100.0)  # N s/m and N m s/rad on a retired part's free joint (~um/s under a part's weight)
 # Bodies a feeder or source builds per part type, whatever its `pool` asks: every body
@@ -39,9 +40,11 @@ RETIRED_DAMPING = (1e5, 100.0)  # N s/m and N m s/rad on a retired part's free j
 # a step, a 2000-body pool made the demo 2.8x slower), and so does a bigger heap of
 # retired parts under the landing ones (a 200-body heap: +60 % a part). No more are ever
 # in play at once; beyond it the bodies are recycled (see `take`), each part's report
-# entry frozen where it came to rest, so the report still gives every part's final pose.
-# The demo's pool: measured flat over 1000 parts (bench/long_run.py).
-MAX_RECYCLED_BODIES = 120
+# entry frozen where it came to rest, so the report still gives every part's final pose
+# (a bin shows the last of them). The demo asks for 120: with 24 its physics step costs
+# a third less (measured 36 -> 24 us a step, docs/performance.md), and it never has more
+# than 6 parts in play (nest, hand, belt, falling).
+MAX_RECYCLED_BODIES = 24
 
 
 class PartPool(Component):
@@ -169,11 +172,8 @@ class PartPool(Component):
         if velocity is not None:
             d.qvel[da:da + 3] = velocity
         d.qvel[da + 2] += -1e-9  # a nonzero velocity wakes the (sleeping) parked tree
-        g, b = self.geom[i], self.body[i]
-        m.geom_contype[g] = LIVE_CONTYPE
-        m.geom_conaffinity[g] = LIVE_CONAFFINITY
-        m.body_contype[b] = LIVE_CONTYPE  # body-level masks filter the broadphase: set them too
-        m.body_conaffinity[b] = LIVE_CONAFFINITY
+        b = self.body[i]
+        self._set_contacts(i, LIVE_CONTYPE, LIVE_CONAFFINITY)
         m.body_gravcomp[b] = 0.0
         d.xpos[b] = pos  # so the checks before the next step see the part where it now is
         d.xquat[b] = d.qpos[qa + 3:qa + 7]
@@ -194,9 +194,8 @@ class PartPool(Component):
         iid = int(self.instance_of[i])
         if iid >= 0:
             self.instances[iid]["frozen"] = self._entry(iid)
-        g, b, qa, da = self.geom[i], self.body[i], self.qadr[i], self.dadr[i]
-        m.geom_contype[g] = m.body_contype[b] = 0
-        m.geom_conaffinity[g] = m.body_conaffinity[b] = 0
+        b, qa, da = self.body[i], self.qadr[i], self.dadr[i]
+        self._set_contacts(i, 0, 0)
         m.body_gravcomp[b] = 1.0
         m.dof_damping[da:da + 6] = 0.0
         d.qpos[qa:qa + 3] = self._park_pos(i)
@@ -206,6 +205,17 @@ class PartPool(Component):
         self.state[i] = PARKED
         self.instance_of[i] = -1
         self.live = self.live[self.live != i]
+
+    def hold(self, i: int, held: bool) -> None:
+        """Body i is held by a grasp (True: it no longer touches the robot) or let go (False)."""
+        self._set_contacts(i, *((HELD_CONTYPE, HELD_CONAFFINITY) if held else (LIVE_CONTYPE, LIVE_CONAFFINITY)))
+
+    def _set_contacts(self, i: int, contype: int, conaffinity: int) -> None:
+        """Body i's contact bits (base.py), on its geom and its body: the body-level masks
+        filter MuJoCo's broadphase, so both are set."""
+        m, g, b = self.model, self.geom[i], self.body[i]
+        m.geom_contype[g] = m.body_contype[b] = contype
+        m.geom_conaffinity[g] = m.body_conaffinity[b] = conaffinity
 
     def instance(self, i: int) -> dict:
         """The current instance record of body i."""
@@ -276,7 +286,7 @@ class PartPool(Component):
                 self._finish(i)
             elif r in self._retire_regions and i != held:
                 da = self.dadr[i]
-                if np.max(np.abs(d.qvel[da:da + 6])) < RETIRE_SPEED:
+                if np.max(np.abs(d.qvel[da:da + 3])) < RETIRE_SPEED and np.max(np.abs(d.qvel[da + 3:da + 6])) < RETIRE_SPIN:
                     self._still[i] += 1
                     if self._still[i] >= RETIRE_CHECKS:
                         self._retire(i)
@@ -304,9 +314,8 @@ class PartPool(Component):
         part by about a millimetre at most (measured 1.1 mm over a 40-part heap).
         """
         m, d = self.model, self.data
-        g, b, da = self.geom[i], self.body[i], self.dadr[i]
-        m.geom_contype[g] = m.body_contype[b] = RETIRED_CONTYPE
-        m.geom_conaffinity[g] = m.body_conaffinity[b] = RETIRED_CONAFFINITY
+        b, da = self.body[i], self.dadr[i]
+        self._set_contacts(i, RETIRED_CONTYPE, RETIRED_CONAFFINITY)
         m.body_gravcomp[b] = 1.0
         m.dof_damping[da:da + 3] = RETIRED_DAMPING[0]
         m.dof_damping[da + 3:da + 6] = RETIRED_DAMPING[1]

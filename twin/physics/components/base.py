@@ -40,6 +40,16 @@ if TYPE_CHECKING:
     from ..schema import Scene
 
 PARKED, LIVE, RETIRED, FINISHED = 0, 1, 2, 3  # states of a pooled part body (`PartPool.state`)
+# Contact bits (MuJoCo: two geoms touch when contype of one & conaffinity of the other).
+# The static cell keeps MuJoCo's 1/1. Live parts touch the cell, the robot, live and retired
+# parts; retired parts (at rest in a bin or tray) touch only live parts; the moving robot
+# touches the cell, live parts and itself; the part a grasp holds touches everything but
+# the robot (the weld holds it: the jaws' or the cup's contacts would only squeeze it, at
+# the cost of a dozen contacts every step, see docs/performance.md).
+LIVE_CONTYPE, LIVE_CONAFFINITY = 1, 3
+RETIRED_CONTYPE, RETIRED_CONAFFINITY = 2, 0
+ROBOT_CONTYPE, ROBOT_CONAFFINITY = 4, 5
+HELD_CONTYPE, HELD_CONAFFINITY = 8, 3
 
 
 @dataclass

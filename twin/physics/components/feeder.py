@@ -52,11 +52,20 @@ class NestFeeder(Component):
 
     def bind(self, model, data, ctx: CellContext) -> None:
         self.parts = ctx.parts
+        r = ctx.regions.index(self.name)
+        self._box = list(zip(ctx.regions.lo[r].tolist(), ctx.regions.hi[r].tolist()))
+
+    def _in_nest(self, body: int) -> bool:
+        """Part body `body`'s centre is in the nest (three float comparisons: this runs
+        every check, and numpy's per-call cost is ten times that)."""
+        x = self.parts.data.xpos[self.parts.body[body]].tolist()
+        return all(lo <= v <= hi for v, (lo, hi) in zip(x, self._box))
 
     def check(self, t: float) -> None:
-        parts = self.parts
-        occupied = len(self._presented) > 0 and bool(self.ctx.regions.contains(
-            self.name, parts.data.xpos[parts.body[self._presented]]).any())
+        parts, presented = self.parts, self._presented
+        # The part last presented is the one usually there; any other counts too.
+        occupied = len(presented) > 0 and (self._in_nest(int(presented[-1])) or bool(
+            self.ctx.regions.contains(self.name, parts.data.xpos[parts.body[presented]]).any()))
         if occupied:
             self._empty_since = None
             return

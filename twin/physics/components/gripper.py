@@ -4,9 +4,9 @@ Both hold a part with a weld that engages only from real contact (MuJoCo's conta
 rotating links drift, so friction or adhesion alone lets a carried part creep: see
 /work/shared/notes/modelling-notes.md): one inactive weld per pooled part (gripper body ->
 part) is declared; on engagement the current relative pose is written into it and it is
-activated; it is released when the gripper lets go, or when the net force the gripper
-applies to the part (weld plus every robot contact with the part) exceeds what the grip
-can carry; then the part is lost (a "slip" event, the part dropped) and falls.
+activated; it is released when the gripper lets go, or when the force the gripper applies
+to the part (the weld's) exceeds what the grip can carry; then the part is lost (a "slip"
+event, the part dropped) and falls.
 
 * Fingers (`FingerGripper`): engage when the jaws are commanded closed and BOTH pads touch
   the same part; capacity 2 * mu * grip force.
@@ -36,6 +36,10 @@ SLIP_GRACE_S = 0.05  # s after a grasp before slip is checked (grip force builds
 # s between updates of the joint torques that carry a held part's weight (they change with
 # the posture only on axes that are not vertical: not at all on a SCARA or a gantry)
 CARRY_UPDATE_S = 0.1
+# A grip carrying less than this share of its capacity is checked for slip only every
+# SLIP_RELAXED_S (the demo's carries: under 1 %; its inertia cannot grow tenfold in that time
+# within the joints' acceleration limits); nearer its capacity, every check.
+SLIP_MARGIN, SLIP_RELAXED_S = 0.1, 0.05
 RELEASE_GRACE_S = 0.5  # s after the gripper lets go of a part during which it may still touch it
 CUP_SEAL = 0.001  # m: the cup seals on a part this close to its face
 SEAL_SEARCH = 0.1  # m: parts whose centre is this near the cup are tested
@@ -58,6 +62,7 @@ class WeldGripper(Component):
         self._held_since = 0.0
         self._released: tuple[int, float] = (-1, -1.0)
         self._carried_at = -1.0
+        self._slip_check_at = -1.0  # no slip check before (a grip far from its capacity)
         self.closed = False
 
     def build(self, spec: mujoco.MjSpec, ctx: CellContext) -> None:
@@ -82,7 +87,6 @@ class WeldGripper(Component):
         self._tcp = model.site(f"{self.prefix}tcp").id
         self._eq = np.array([model.equality(f"grasp_{i}").id for i in range(ctx.parts.size)], dtype=int)
         robot: Robot = ctx.by_kind["robot"]["robot"]
-        self._robot_geom = robot.robot_geom
         self._robot = robot
 
     @property
@@ -119,8 +123,11 @@ class WeldGripper(Component):
         m.eq_data[eq, 6:10] = relq
         m.eq_data[eq, 10] = 1.0  # torquescale
         d.eq_active[eq] = 1
+        self._hold_jaws(i)
+        self.parts.hold(i, True)
         self.held = i
         self._held_since = self.time
+        self._slip_check_at = -1.0
         self._carry(i)
         self.parts.mark_picked(i)
         self.ctx.event("grasp", part=int(self.parts.instance_of[i]), where=self.ctx.regions.region_of(p2))
@@ -141,37 +148,29 @@ class WeldGripper(Component):
                            max_payload_kg=payload[-1])
 
     def load(self, i: int) -> float:
-        """Norm of the net force the gripper applies to part i, N: its weld plus every contact
-        of a robot geom with the part.  The weld and the squeezing pads (or the cup pressing
-        down) push against each other; only their sum is what the grip must carry (the part's
-        weight and inertia, and whatever presses the part against the cell)."""
-        m, d = self.model, self.data
+        """Norm of the net force the gripper applies to part i, N: the force of its weld (the
+        held part does not touch the robot, see the module docstring), what the grip must
+        carry: the part's weight and inertia, and whatever presses it against the cell."""
+        d = self.data
         eq = self._eq[i]
-        nefc = d.nefc
+        head = min(d.nefc, 12)
         # Equality rows come first in the constraint list; only one weld is ever active.
-        rows = np.flatnonzero((d.efc_type[:min(nefc, 12)] == EQUALITY_ROW)
-                              & (d.efc_id[:min(nefc, 12)] == eq))
+        rows = np.flatnonzero((d.efc_type[:head] == EQUALITY_ROW) & (d.efc_id[:head] == eq))
         if len(rows) < 3:
             return 0.0
-        weld = -d.efc_force[rows[:3]]  # the weld pulls body2 (the part) against its error
-        g = self.parts.geom[i]
-        contact = d.contact  # each attribute read copies MuJoCo's arrays: read them once
-        pairs = contact.geom[:d.ncon]
-        robot = self._robot_geom[pairs]
-        gripping = np.flatnonzero(((pairs[:, 0] == g) & robot[:, 1]) | ((pairs[:, 1] == g) & robot[:, 0]))
-        if not len(gripping):
-            return float(np.linalg.norm(weld))
-        local = np.zeros((len(gripping), 6))
-        for row, k in zip(local, gripping.tolist()):
-            mujoco.mj_contactForce(m, d, k, row)
-        frames = contact.frame[gripping].reshape(-1, 3, 3)
-        forces = np.einsum("kji,kj->ki", frames, local[:, :3])  # on geom2, world axes
-        forces[pairs[gripping, 1] != g] *= -1.0
-        return float(np.linalg.norm(weld + forces.sum(axis=0)))
+        return float(np.linalg.norm(d.efc_force[rows[:3]]))
+
+    def _hold_jaws(self, i: int) -> None:
+        """Keep the jaws on part i once its contacts are off (a finger gripper's)."""
+
+    def _free_jaws(self) -> None:
+        """After a slip: the hand's command back on the jaws (a finger gripper's)."""
 
     def _check_slip(self) -> None:
-        i = self.held
-        if self.time >= self._carried_at + CARRY_UPDATE_S:  # the arm's posture changed
+        i, t = self.held, self.time
+        if t < self._slip_check_at:
+            return
+        if t >= self._carried_at + CARRY_UPDATE_S:  # the arm's posture changed
             self._carry(i)
         capacity = self.capacity(i)
         force = self.load(i)
@@ -179,11 +178,16 @@ class WeldGripper(Component):
             self.ctx.event("slip", part=int(self.parts.instance_of[i]), force_n=round(force, 2),
                            capacity_n=round(capacity, 2))
             self._release(i, commanded=False)
+        elif force < SLIP_MARGIN * capacity:  # far from slipping: look again a little later
+            self._slip_check_at = t + SLIP_RELAXED_S
 
     def _release(self, i: int, commanded: bool) -> None:
         d = self.data
         d.eq_active[self._eq[i]] = 0
         self.held = None
+        self.parts.hold(i, False)
+        if not commanded:  # a slip: the jaws are still commanded closed (opening set their command)
+            self._free_jaws()
         self._robot.carry(None)
         self.parts.wake_body(i)  # a part let go at rest must not sleep in mid-air
         self._released = (i, float(d.time))
@@ -219,6 +223,8 @@ class FingerGripper(WeldGripper):
                                      model.actuator(f"{gp}finger_right_act").id])
         self._close_ctrl = model.actuator_ctrlrange[self._finger_act, 1].copy()
         self._pads = (model.geom(f"{gp}pad_left").id, model.geom(f"{gp}pad_right").id)
+        self._jaw_qadr = model.jnt_qposadr[model.actuator_trnid[self._finger_act, 0]]
+        self._jaw_hold = np.zeros(2)  # jaw positions at the held part's faces (m)
         self.pad_mu = float(max(model.geom_friction[self._pads[0], 0], model.geom_friction[self._pads[1], 0]))
         jaw_body = np.array([model.body(b).name.startswith(f"{gp}finger") for b in range(model.nbody)])
         self._gripping_geom = jaw_body[model.geom_bodyid]
@@ -242,14 +248,44 @@ class FingerGripper(WeldGripper):
         self.closed = closed
 
     def grip_force(self) -> float:
-        """Squeeze on a gripped part, N: the smaller of the two jaw actuator forces."""
+        """Squeeze on a gripped part, N: the smaller of the two jaw actuator forces; while a
+        part is held, the force each closed jaw's servo pushes with at the part's face
+        (its gain times the command's lead on that face, within its force range)."""
         left, right = self._finger_act.tolist()  # two floats: plain Python beats numpy's reductions
-        force = self.data.actuator_force
-        return min(abs(float(force[left])), abs(float(force[right])))
+        if self.held is None:
+            force = self.data.actuator_force
+            return min(abs(float(force[left])), abs(float(force[right])))
+        m, pushes = self.model, []
+        for jaw, act in enumerate((left, right)):
+            f = float(m.actuator_gainprm[act, 0] * (self._close_ctrl[jaw] - self._jaw_hold[jaw]))
+            if m.actuator_forcelimited[act]:
+                f = min(max(f, float(m.actuator_forcerange[act, 0])), float(m.actuator_forcerange[act, 1]))
+            pushes.append(abs(f))
+        return min(pushes)
 
     def capacity(self, i: int) -> float:
         mu = max(self.pad_mu, float(self.model.geom_friction[self.parts.geom[i], 0]))
         return 2.0 * mu * self.grip_force()
+
+    def _hold_jaws(self, i: int) -> None:
+        """Each jaw's servo holds it where its pad's face meets part i (the jaw's position
+        less the pad's penetration); `grip_force` is then what the closed jaw pushes with
+        there."""
+        d = self.data
+        g = int(self.parts.geom[i])
+        ncon = d.ncon
+        contact = d.contact  # each attribute read copies MuJoCo's arrays: read them once
+        pairs, dist = contact.geom[:ncon], contact.dist[:ncon]
+        for jaw, pad in enumerate(self._pads):
+            q = float(d.qpos[self._jaw_qadr[jaw]])
+            ks = np.flatnonzero(((pairs[:, 0] == pad) & (pairs[:, 1] == g)) | ((pairs[:, 1] == pad) & (pairs[:, 0] == g)))
+            if len(ks):
+                q += min(float(dist[ks].min()), 0.0)
+            self._jaw_hold[jaw] = q
+        d.ctrl[self._finger_act] = self._jaw_hold
+
+    def _free_jaws(self) -> None:
+        self.data.ctrl[self._finger_act] = self._close_ctrl if self.closed else 0.0  # the jaws close on
 
     def check(self, t: float) -> None:
         if self.config.holding_input is not None:

@@ -15,13 +15,15 @@ which stops the robot and the program (`take_collisions`).
 
 from __future__ import annotations
 
+from typing import Callable
+
 import mujoco
 import numpy as np
 
 from ...controller.kinematics import LinearRail, RobotKinematics
 from ..geometry import matrix_to_quat, vplus_to_matrix
 from ..scene import load_model, resolve
-from .base import CellContext, Component
+from .base import ROBOT_CONAFFINITY, ROBOT_CONTYPE, CellContext, Component
 
 
 class Robot(Component):
@@ -98,14 +100,31 @@ class Robot(Component):
         # (they are in the robot files): a slice assignment costs a third of an index array's.
         self._ctrl_pos, self._ctrl_vel, self._dofs = (_as_slice(self.act_pos), _as_slice(self.act_vel),
                                                       _as_slice(self.dadr))
+        both = _as_slice(np.concatenate([self.act_pos, self.act_vel]))
+        self._ctrl_both = both if isinstance(both, slice) else None
+        self._feed_torque = np.zeros((0, len(self.dadr)))  # torque rows of the last `servo_feed`
         root = m.body(self.root_name).id
         robot_body = np.array([self._descends_from(b, root) and m.body_weldid[b] != 0 for b in range(m.nbody)])
         self.robot_geom = robot_body[m.geom_bodyid]  # moving robot geoms, gripper included
+        self._robot_contact_bits(robot_body)
         self._touching: set[tuple[int, int]] = set()
         self.collisions: list[dict] = []
         self._gripper = ctx.by_kind["gripper"]["gripper"]
         self.payload_torque = np.zeros(len(self.dadr))  # set by the gripper while it holds a part
         self._jacp = np.zeros((3, m.nv))
+        self._mass_gather = self._mass_block_index()
+
+    def _robot_contact_bits(self, robot_body: np.ndarray) -> None:
+        """The moving robot's colliding geoms get the robot's contact bits (base.py), so that
+        the part a grasp holds can stop touching it; the body-level masks follow."""
+        m = self.model
+        colliding = self.robot_geom & ((m.geom_contype != 0) | (m.geom_conaffinity != 0))
+        m.geom_contype[colliding] = ROBOT_CONTYPE
+        m.geom_conaffinity[colliding] = ROBOT_CONAFFINITY
+        for b in np.flatnonzero(robot_body).tolist():
+            geoms = m.geom_bodyid == b
+            m.body_contype[b] = np.bitwise_or.reduce(m.geom_contype[geoms], initial=0)
+            m.body_conaffinity[b] = np.bitwise_or.reduce(m.geom_conaffinity[geoms], initial=0)
 
     def home(self, location: list[float]) -> None:
         """Put the robot at the IK of `location` (RIGHTY), held there by its servos; a rail
@@ -144,6 +163,45 @@ class Robot(Component):
         mujoco.mj_mulM(self.model, self.data, self._torque_full, self._qdd_full)
         applied[dofs] = self._torque_full[dofs] + self.payload_torque
 
+    def servo_feed(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> Callable[[int], None]:
+        """The references of several physics steps at once (rows of q, qd, qdd): the function
+        that sets row j's before step j, as `set_servo` does.  The inertia feed-forward is
+        M qdd with the arm's mass matrix at the first step (it changes by well under a
+        percent in the steps of one controller cycle)."""
+        rows, cols, addresses = self._mass_gather
+        block = np.zeros((len(self.dadr), len(self.dadr)))
+        block[rows, cols] = block[cols, rows] = self.data.M[addresses]  # MuJoCo stores the lower triangle
+        torque = self._feed_torque = qdd @ block.T + self.payload_torque  # `carry` keeps it current
+        ctrl, applied, dofs = self.data.ctrl, self.data.qfrc_applied, self._dofs
+        if self._ctrl_both is not None:  # positions and velocities side by side: one write a step
+            rows, both = np.concatenate([q, qd], axis=1), self._ctrl_both
+
+            def feed(j: int) -> None:
+                ctrl[both] = rows[j]
+                applied[dofs] = torque[j]
+            return feed
+        pos, vel = self._ctrl_pos, self._ctrl_vel
+
+        def feed(j: int) -> None:
+            ctrl[pos] = q[j]
+            ctrl[vel] = qd[j]
+            applied[dofs] = torque[j]
+        return feed
+
+    def _mass_block_index(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Where the arm's joint block of the mass matrix lies in MuJoCo's sparse `data.M`
+        (its lower triangle, by rows: `M_rowadr`, `M_rownnz`, `M_colind`): the block's row
+        and column of each entry, and the entry's address."""
+        m, dofs = self.model, self.dadr.tolist()
+        entries = []
+        for a, dof in enumerate(dofs):
+            start = int(m.M_rowadr[dof])
+            for adr in range(start, start + int(m.M_rownnz[dof])):
+                col = int(m.M_colind[adr])
+                if col in dofs:
+                    entries.append((a, dofs.index(col), adr))
+        return tuple(np.array(column, dtype=int) for column in zip(*entries))
+
     def carry(self, part_body: int | None, holder_body: int = -1) -> None:
         """The drives take the weight of a held part (None: nothing held), as the servos'
         integral action does: the joint torques that hold its weight where it hangs on the
@@ -154,29 +212,18 @@ class Robot(Component):
             m, d = self.model, self.data
             mujoco.mj_jac(m, d, self._jacp, None, d.xipos[part_body], holder_body)
             torque = self._jacp[:, self.dadr].T @ (-m.body_mass[part_body] * m.opt.gravity)
-        self.data.qfrc_applied[self.dadr] += torque - self.payload_torque
+        change = torque - self.payload_torque
+        self.data.qfrc_applied[self.dadr] += change
+        self._feed_torque += change  # the steps still to be fed carry it too
         self.payload_torque = torque
 
     # ------------------------------------------------------------------ collisions
     def check(self, t: float) -> None:
         """Record each new robot contact that is a collision (see the module docstring)."""
-        d = self.data
-        ncon = d.ncon
-        touching: set[tuple[int, int]] = set()
-        parts, gripper = self.ctx.parts, self._gripper
-        if ncon:
-            contact = d.contact  # each attribute read copies MuJoCo's arrays: read them once
-            g = contact.geom[:ncon]
-            robot = self.robot_geom[g]
-            mixed = (robot[:, 0] != robot[:, 1]) & (contact.dist[:ncon] < 0.0)
-            if mixed.any():
-                first_ours = robot[mixed, 0]
-                pairs = np.where(first_ours[:, None], g[mixed], g[mixed][:, ::-1])  # (ours, other)
-                # A box on a pad makes up to 4 contacts: each geom pair is judged once.
-                for ours, other in set(map(tuple, pairs.tolist())):
-                    if not gripper.contact_allowed(ours, int(parts.geom_part[other]), t):
-                        touching.add((ours, other))
-        m = self.model
+        touching = self._collisions_now(t)
+        if not touching and not self._touching:
+            return
+        m, d, parts = self.model, self.data, self.ctx.parts
         for ours, other in sorted(touching - self._touching):
             part = int(parts.geom_part[other])
             event = self.ctx.event("collision", **{
@@ -185,6 +232,26 @@ class Robot(Component):
                 "where": self.ctx.regions.region_of(d.geom_xpos[ours])})
             self.collisions.append(event)
         self._touching = touching
+
+    def _collisions_now(self, t: float) -> set[tuple[int, int]]:
+        """(robot geom, other geom) of each robot contact now that the gripper does not allow."""
+        d = self.data
+        ncon = d.ncon
+        if not ncon:
+            return set()
+        contact = d.contact  # each attribute read copies MuJoCo's arrays: read them once
+        g = contact.geom[:ncon]
+        robot = self.robot_geom[g]
+        if not robot.any():  # most contacts are the parts' with the cell
+            return set()
+        mixed = (robot[:, 0] != robot[:, 1]) & (contact.dist[:ncon] < 0.0)
+        if not mixed.any():
+            return set()
+        parts, gripper = self.ctx.parts, self._gripper
+        pairs = np.where(robot[mixed, 0][:, None], g[mixed], g[mixed][:, ::-1])  # (ours, other)
+        # A box on a pad makes up to 4 contacts: each geom pair is judged once.
+        return {(ours, other) for ours, other in set(map(tuple, pairs.tolist()))
+                if not gripper.contact_allowed(ours, int(parts.geom_part[other]), t)}
 
 
 RAIL_BEAM_HEIGHT = 0.04  # m, between the bench and the base (a scene puts the base this high)
