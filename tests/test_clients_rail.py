@@ -120,7 +120,7 @@ def test_pylabrobot_moves_the_rail_to_pick_and_place_across_the_bench(tmp_path):
     assert log["axes"] == ["6", "47", "401.5,93,348,960,134,500"]
     assert log["start"][PFAxis.RAIL] == pytest.approx(0.0, abs=0.05)
     assert log["rail_1"] == -400.0
-    assert log["too_far"] == -1025  # the arm alone does not reach it
+    assert log["too_far"] == -1033  # the arm alone does not reach it (Invalid Cartesian value)
     at = log["at_rail_1"]
     assert at[PFAxis.RAIL] == pytest.approx(-400.0, abs=0.05)
     for axis in (PFAxis.BASE, PFAxis.SHOULDER, PFAxis.ELBOW, PFAxis.WRIST):  # the arm stayed still
@@ -169,7 +169,7 @@ def test_the_commands_of_a_field_pf400_driver_on_a_rail():
         assert tcs("hp 1") == "0" and tcs("sysState") == "0 20"
         assert tcs("attach 1") == "0" and tcs("sysState") == "0 21" and tcs("pd 234") == "0 21"
         assert tcs("home") == "0" and tcs("pd 2800") == "0 1"
-        assert tcs("state") == "0 0"  # Robot.TrajState: no motion
+        assert tcs("state") == "0 1"  # Robot.TrajState 1 "Idle" (the TCP Command Server 3.0's state labels)
         assert tcs("Profile 1 50 50 50 50 0.1 0.1 10 0") == "0"
         assert tcs("GripOpenPos 123") == "0" and tcs("GripClosePos 77") == "0"
         neutral = [400.0, 1.4, 177.101, 537.107, 77.0, -150.0]

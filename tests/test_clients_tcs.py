@@ -21,7 +21,7 @@ def test_the_command_set_over_a_raw_socket():
         assert int(code) < 0 and "Power" in message  # the GPL library's power error
         assert tcs("hp") == "0 0"
         assert tcs("hp 1 10") == "0" and tcs("hp") == "0 1"
-        assert tcs("move 1 1").startswith("-1027 ")  # not homed yet (twin GPL code)
+        assert tcs("move 1 1").startswith("-1021 ")  # not homed yet (Brooks error list: Robot not homed)
         assert tcs("attach") == "0 0" and tcs("home").startswith("-1009 ")  # homing needs the robot attached
         assert tcs("attach 1") == "0" and tcs("attach") == "0 -1"
         assert tcs("home") == "0"

@@ -73,7 +73,85 @@ def test_pdb_errors_are_catchable_gpl_errors(tmp_path):
         End Try
 """)
     assert report.errors == []
-    assert report.output.splitlines() == ["-501", "-502", "-1000", "-706", "-708"]
+    # Brooks error list: -1501 Unknown Data ID code, -209 Read only, -1514 Invalid parameter
+    # array index (a robot number too large)
+    assert report.output.splitlines() == ["-1501", "-209", "-1514", "-202", "-717"]
+
+
+def test_pdb_robot_speed_homing_payload_and_gpl_variables(tmp_path):
+    """DataIDs and labels of a PreciseFlex's saved configuration (AD-SDL/pf400_module_ros
+    controller.pac, robot01.pac, calib01.pac, gpl_vars.pac, GPL 4.2J2): 2700 / 2702 the
+    100 % joint speeds and accelerations (the robot model's, deg/s and mm/s), 16077 / 16078
+    the joint soft limits, 2802 / 2803 / 2810 homing, 16071 the default %payload that
+    Robot.Payload starts from, 601 the test speed that Controller.SystemSpeed also sets,
+    1800-1849 GPL program Strings, 1890 a 25-value GPL variable array."""
+    report = on_cell(tmp_path, """
+        Console.WriteLine(Controller.PDb(2700))
+        Console.WriteLine(Controller.PDb(2702))
+        Console.WriteLine(Controller.PDb(16077) & " / " & Controller.PDb(16078))
+        Console.WriteLine(Controller.PDb(2802) & " " & Controller.PDb(2803) & " " & Controller.PDb(2810))
+        Controller.PDbNum(2803, 1, 1, 3) = -3
+        Console.WriteLine(Controller.PDb(2803))
+        Console.WriteLine(CStr(Robot.Payload))
+        Controller.PDbNum(16071) = 25
+        Console.WriteLine(CStr(Robot.Payload))
+        Robot.Payload = 60
+        Console.WriteLine(CStr(Robot.Payload) & " " & Controller.PDb(16071))
+        Controller.SystemSpeed = 40
+        Console.WriteLine(Controller.PDb(601))
+        Controller.PDbNum(601) = 20
+        Console.WriteLine(CStr(Controller.SystemSpeed))
+        Controller.PDb(1800) = "tray A"
+        Console.WriteLine(Controller.PDb(1800) & "|" & Controller.PDb(1849) & "|")
+        Controller.PDbNum(1890, 1, 1, 25) = 3.5
+        Console.WriteLine(CStr(Controller.PDbNum(1890, 1, 1, 25)) & " " & CStr(Controller.PDbNum(1891, 1, 1, 1)))
+""")
+    assert report.errors == []
+    lines = report.output.splitlines()
+    speeds = [float(v) for v in lines[0].split(",")]
+    accels = [float(v) for v in lines[1].split(",")]
+    assert len(speeds) == len(accels) == 4 and all(v > 0 for v in speeds + accels)
+    upper, lower = ([float(v) for v in side.split(",")] for side in lines[2].split(" / "))
+    assert len(upper) == len(lower) == 4 and all(lo < hi for lo, hi in zip(lower, upper))
+    assert lines[3:] == ["2 -9,-9,-9,-9 1,2,3,4,0,0,0,0,0,0,0,0", "-9,-9,-3,-9", "0", "25", "60 25",
+                         "40", "20", "tray A||", "3.5 0"]
+
+
+def test_pdb_index_and_value_errors(tmp_path):
+    """Brooks error list: -1509 Invalid data index (an array index beyond the array),
+    -707 Value out-of-range (a test speed or payload outside 0-100 percent)."""
+    report = on_cell(tmp_path, """
+        Dim ex As Exception
+        Try
+            Console.WriteLine(Controller.PDb(1890, 1, 1, 26))
+        Catch ex
+            Console.WriteLine(CStr(ex.ErrorCode))
+        End Try
+        Try
+            Controller.PDbNum(601) = 150
+        Catch ex
+            Console.WriteLine(CStr(ex.ErrorCode))
+        End Try
+        Try
+            Robot.Payload = -5
+        Catch ex
+            Console.WriteLine(CStr(ex.ErrorCode))
+        End Try
+        Try
+            Controller.PDbNum(16077, 1, 1, 1) = 10
+        Catch ex
+            Console.WriteLine(CStr(ex.ErrorCode))
+        End Try
+        Try
+            Controller.PDbNum(14002, 1, 0, 0) = 1
+        Catch ex
+            Console.WriteLine(CStr(ex.ErrorCode))
+        End Try
+        Console.WriteLine(CStr(Controller.SystemSpeed))
+""")
+    assert report.errors == []
+    # 14002 (release brake, a servo expert command of the PDB's 14000-14999 group): -204
+    assert report.output.splitlines() == ["-1509", "-707", "-707", "-209", "-204", "50"]
 
 
 def test_restart_tool_and_base_come_from_the_database(tmp_path):
@@ -188,6 +266,44 @@ Module M
 End Module
 """)
     assert out == "4 8 4\n"
+
+
+def test_a_class_public_const_is_unqualified_outside_where_it_is_unique():
+    """Brooks error list -772 *Ambiguous Public reference*: "References to top-level public
+    variables do not need to be qualified by their containing module or class provided that
+    they are unique"; the TCP Command Server 3.0 tests `sta.flags And STA_FL_PAL` in its
+    modules with STA_FL_PAL a Public Const of class Station.  The same name Public in two
+    classes must be qualified (-2009)."""
+    out = output_of("""
+Public Class Station
+    Public Const STA_FL_PAL As Integer = &H0001
+    Public Shared Count As Integer = 2
+    Public flags As Integer
+End Class
+Module M
+    Public Sub Main()
+        Dim s As New Station
+        s.flags = 17
+        Console.WriteLine(CStr(s.flags And STA_FL_PAL) & " " & CStr(Count))
+    End Sub
+End Module
+""")
+    assert out == "1 2\n"
+    with pytest.raises(ProgramError) as caught:
+        output_of("""
+Class A
+    Public Const FLAG As Integer = 1
+End Class
+Class B
+    Public Const FLAG As Integer = 2
+End Class
+Module M
+    Public Sub Main()
+        Console.WriteLine(CStr(FLAG))
+    End Sub
+End Module
+""")
+    assert caught.value.code == -2009 and caught.value.line == 10
 
 
 def test_module_const_from_another_modules_member_whatever_the_file_order(tmp_path):
@@ -327,7 +443,7 @@ End Module
 ])
 def test_integer_overflow_is_an_error_for_every_store(statement):
     """Integer is 32-bit (Table 4-1); a value out of its range stored in an Integer (a
-    variable, an array element, a field, a Function's result) is -703 *Numeric overflow*,
+    variable, an array element, a field, a Function's result) is -708 *Value infinite or NAN*,
     as Short and Byte are; the program's Try/Catch sees it."""
     out = output_of(f"""
 Class Counter
@@ -351,7 +467,7 @@ Module M
     End Sub
 End Module
 """)
-    assert out == "-703\n"
+    assert out == "-708\n"
 
 
 def test_integer_arithmetic_in_range_is_unchanged():
@@ -369,10 +485,12 @@ End Module
     assert out == "2147483647 6 2147483646 -2147483648\n"
 
 
-@pytest.mark.parametrize("expression", ["d * d", "d + d", "-d - d", "d / 1E-300", "d ^ 2", "CDbl(\"1E400\")"])
-def test_double_overflow_is_703_not_infinity(expression):
-    """Double overflow is -703 (docs/gpl.md error table, L1156), never INF: stored, shown
-    or converted."""
+@pytest.mark.parametrize("expression, code", [("d * d", -710), ("d + d", -710), ("-d - d", -710),
+                                              ("d / 1E-300", -710), ("d ^ 2", -710), ("CDbl(\"1E400\")", -708)])
+def test_double_overflow_is_an_error_not_infinity(expression, code):
+    """Double overflow is an error, never INF, stored, shown or converted (L1156): an
+    operation's result beyond the Double range is -710 *Arithmetic overflow*, a conversion
+    of a String beyond it -708 *Value infinite or NAN* (Brooks error code list)."""
     for use in (f"x = {expression}", f"Console.WriteLine({expression})", f"Console.WriteLine(CStr({expression}))"):
         out = output_of(f"""
 Module M
@@ -388,7 +506,7 @@ Module M
     End Sub
 End Module
 """)
-        assert out == "-703\n", use
+        assert out == f"{code}\n", use
 
 
 def test_not_on_a_number_is_logical():
@@ -536,7 +654,7 @@ def test_library_signatures_field_code_relies_on(tmp_path):
         Dim p As New Profile
         p.Speed2 = 0
         Console.WriteLine(CStr(p.Speed2))
-        Dim ex As New Exception(-1025)
+        Dim ex As New Exception(-1033)
         ex.UpdateErrorCode()
         ex.UpdateErrorCode
         Console.WriteLine(CStr(ex.ErrorCode))
@@ -547,7 +665,7 @@ def test_library_signatures_field_code_relies_on(tmp_path):
         Console.WriteLine(a.Type & " " & a.X & " " & a.Y)
 """)
     assert report.errors == []
-    assert report.output.splitlines() == ["1 20 40", "0", "-1025", "0", "0 300 10"]
+    assert report.output.splitlines() == ["1 20 40", "0", "-1033", "0", "0 300 10"]
 
 
 def test_pallet_order_uses_the_dictionarys_encoding():
@@ -581,10 +699,12 @@ End Module
     assert out.splitlines() == ["0", "0: 1", "1: 1", "2: 10", "3: 10", "4: 100", "5: 100"]
 
 
-def test_addressof_an_undefined_procedure_is_undefined_procedure():
-    """AddressOf (or a Delegate's New) of a procedure that does not exist is -710
-    *Undefined procedure*, the code a command server's dispatcher expects; a name given
-    as a String is found when the New runs, and the same code can be caught."""
+def test_an_undefined_procedure_in_addressof_or_a_delegate_or_a_thread():
+    """AddressOf a procedure that does not exist stops the load (Undefined symbol); a name
+    given as a String is found when the New runs: a Delegate's is -729 *Undefined symbol*,
+    a Thread's -744 *Invalid start procedure* ("The start procedure specified ... by a
+    Thread.Start method could not be found"), both from the Brooks error code list and
+    both catchable, as a command server's dispatcher needs."""
     for target in ("Missing", "M.Missing"):
         with pytest.raises(ProgramError) as caught:
             output_of(f"""
@@ -595,7 +715,7 @@ Module M
     End Sub
 End Module
 """)
-        assert caught.value.code == -710 and caught.value.line == 5
+        assert caught.value.code == -2002 and caught.value.line == 5
     out = output_of("""
 Delegate Sub Cmd()
 Module M
@@ -605,7 +725,231 @@ Module M
         Catch ex As Exception
             Console.WriteLine(CStr(ex.ErrorCode))
         End Try
+        Try
+            Dim t As New Thread("NoSuchProcedure")
+            t.Start()
+        Catch ex As Exception
+            Console.WriteLine(CStr(ex.ErrorCode))
+        End Try
     End Sub
 End Module
 """)
-    assert out == "-710\n"
+    assert out == "-729\n-744\n"
+
+
+# ------------------------------------------------------------ members of the manual's tables
+def test_source_angles_and_power_state_mode(tmp_path):
+    """Manual L2182 Robot.SourceAngles: the axes at the start of the previous motion
+    (Robot.DestAngles its end); L2131 Controller.PowerState, which the GPL Dictionary
+    writes Controller.PowerState(mode)."""
+    report = on_cell(tmp_path, """
+        Dim target As New Location
+        Dim start As Location
+        Dim p As New Profile
+        Console.WriteLine(CStr(Controller.PowerState(0)))
+        Controller.PowerEnabled = True
+        Robot.Attached = 1
+        Robot.Home
+        Console.WriteLine(CStr(Controller.PowerState(1)))
+        start = Robot.WhereAngles
+        target.Type = 1
+        target.Angles(start.Angle(1) + 20, start.Angle(2) - 15, start.Angle(3), start.Angle(4) + 30)
+        Move.Loc(target, p)
+        Move.WaitForEOM
+        Console.WriteLine(Format(Robot.SourceAngles.Angle(1) - start.Angle(1), "0.000"))
+        Console.WriteLine(Format(Robot.SourceAngles(1).Angle(4) - start.Angle(4), "0.000"))
+        Console.WriteLine(Format(Robot.DestAngles.Angle(1) - start.Angle(1), "0.000"))
+        Move.Loc(start, p)
+        Move.WaitForEOM
+        Console.WriteLine(Format(Robot.SourceAngles.Angle(2) - start.Angle(2), "0.000"))
+""")
+    assert report.errors == []
+    # PowerState: 7 off, 21 on with the robot attached (DataID 234, robot.power_state)
+    assert report.output.splitlines() == ["7", "21", "0.000", "0.000", "20.000", "-15.000"]
+
+
+def test_pdb_as_the_tcp_command_server_reads_it(tmp_path):
+    """A unit and sub unit of 0 are the first (the controller's .pac files write
+    "DI: 2000, 0, 0, 0"), and PDbNum with array_index 0 reads or sets the first value:
+    the TCP Command Server 3.0 reads Controller.PdbNum(2000, robot, 0, 0) (number of
+    axes), PdbNum(2007, robot, 0, 0) (the robot model number, 400 for a PreciseFlex 400
+    in robot01.pac) and PdbNum(113) (PDB: controller type, 10 for the next generation
+    controller)."""
+    report = on_cell(tmp_path, """
+        Console.WriteLine(CStr(Controller.PdbNum(2000, 1, 0, 0)) & " " & CStr(Controller.PdbNum(2007, 1, 0, 0)))
+        Console.WriteLine(CStr(Controller.PdbNum(113)) & " " & Controller.PDb(2002, 0, 0))
+        Controller.PdbNum(2803, 1, 0, 0) = -3
+        Console.WriteLine(Controller.PDb(2803, 0, 0, 0))
+""")
+    assert report.errors == []
+    assert report.output.splitlines() == ["4 0", "10 Robot 1", "-3,-9,-9,-9"]
+
+
+def test_pdb_robot_model_number_of_the_pf400(tmp_path):
+    """DataID 2007 "Robot model number or version" is 400 on the PreciseFlex 400 bench
+    (robot01.pac of a PF400), as the TCP Command Server's RobType expects."""
+    scene = Path(__file__).resolve().parents[1] / "scenes" / "pf400_plates.toml"
+    report = run_program(main_project(tmp_path, """
+        Console.WriteLine(CStr(Controller.PdbNum(2007, 1, 0, 0)) & " " & Controller.PDb(2000))
+"""), scene=scene, max_sim_time=5.0).report
+    assert report.errors == []
+    assert report.output.splitlines() == ["400 5"]  # the servo gripper is axis 5, as on a PF400
+
+
+def test_system_state_power_and_homing_dataids_and_traj_state(tmp_path):
+    """What the TCP Command Server 3.0 reads and writes: DataID 234 the system state (7
+    "Power off - waiting for power request TRUE", 20 "Power on - ready to have GPL attach
+    robot", 21 "GPL project attached to robot", the server's own labels), 241 "Power enable"
+    (Brooks error list, -1600) turns power on, 213 = 1 homes every robot (its HomeAll), 111
+    the number of robots; Robot.TrajState 0 "Halted" with power off, 1 "Idle", 3 "Position
+    mode - constant" while a motion runs (its DestC / DestJ test `state <= 1`)."""
+    report = on_cell(tmp_path, """
+        Dim target As Location
+        Dim p As New Profile
+        Console.WriteLine(Controller.PDb(234) & " " & CStr(Robot.TrajState(1)) & " " & CStr(Controller.PdbNum(111)))
+        Controller.PDbNum(241, 0, 0, 0) = 1
+        Console.WriteLine(Controller.PDb(234) & " " & CStr(Controller.PowerEnabled) & " " & CStr(Robot.TrajState(1)))
+        Controller.PDbNum(213) = 1
+        Console.WriteLine(CStr(Robot.Homed) & " " & Controller.PDb(213))
+        Robot.Attached = 1
+        Console.WriteLine(Controller.PDb(234))
+        target = Robot.WhereAngles
+        target.Angle(1) = target.Angle(1) + 30
+        Move.Loc(target, p)
+        Thread.Sleep(100)
+        Console.WriteLine(CStr(Robot.TrajState(1)))
+        Move.WaitForEOM
+        Console.WriteLine(CStr(Robot.TrajState(1)))
+        Controller.PDbNum(241) = 0
+        Console.WriteLine(Controller.PDb(234) & " " & CStr(Controller.PowerEnabled))
+""")
+    assert report.errors == []
+    assert report.output.splitlines() == ["7 0 1", "20 True 1", "True 0", "21", "3", "1", "7 False"]
+
+
+def test_vision_default_result_and_rapid_decel_as_a_statement(tmp_path):
+    """The TCP Command Server 3.0 asks `glbVision.ResultCount` and `glbVision.Result()`
+    with no tool ("If not specified, return the default result"): the process's last tool
+    (docs/gpl.md); its halt command is the statement `Robot.RapidDecel(robot)` (manual
+    L2176 gives the property form, `Robot.RapidDecel = True`, too)."""
+    scene = Path(__file__).resolve().parents[1] / "scenes" / "scara_vision.toml"
+    report = run_program(main_project(tmp_path, """
+        Dim vis As New Vision
+        Dim r As VisResult
+        Dim far As Location
+        Dim p As New Profile
+        Thread.Sleep(500)
+        vis.Process("Main")
+        Console.WriteLine(CStr(vis.ResultCount) & " " & CStr(vis.ResultCount("inspect")))
+        r = vis.Result()
+        Console.WriteLine(Format(r.Loc.X - vis.Result("inspect", 1).Loc.X, "0.000") & " " & CStr(r.InspectPassed))
+        Controller.PowerEnabled = True
+        Robot.Attached = 1
+        Robot.Home
+        far = Robot.WhereAngles
+        far.Angle(1) = far.Angle(1) + 60
+        Move.Loc(far, p)
+        Thread.Sleep(100)
+        Robot.RapidDecel(1)
+        Move.WaitForEOM
+        Console.WriteLine(CStr(Math.Abs(Robot.WhereAngles.Angle(1) - far.Angle(1)) > 1))
+"""), scene=scene, max_sim_time=20.0).report
+    assert report.errors == []
+    count, inspected = report.output.splitlines()[0].split()
+    assert count == inspected and int(count) >= 1
+    assert report.output.splitlines()[1].startswith("0.000 ")
+    assert report.output.splitlines()[2] == "True"  # stopped short of the destination
+
+
+def test_exception_messages_of_codes_field_code_throws():
+    """Exception.Message of a code a program sets and throws, as the TCP Command Server
+    3.0 does (-1017 with RobotError, -717, -704, -1001): the messages of the Brooks error
+    code list."""
+    out = output_of("""
+Module M
+    Public Sub Main()
+        Dim codes(3) As Integer
+        Dim i As Integer
+        Dim ex As Exception
+        codes(0) = -1017
+        codes(1) = -717
+        codes(2) = -704
+        codes(3) = -1001
+        For i = 0 To 3
+            Try
+                ex = New Exception
+                ex.ErrorCode = codes(i)
+                If i = 0 Then
+                    ex.RobotError = True
+                    ex.RobotNum = 1
+                End If
+                Throw ex
+            Catch ex
+                Console.WriteLine(CStr(ex.ErrorCode) & " " & ex.Message)
+            End Try
+        Next i
+    End Sub
+End Module
+""")
+    assert out.splitlines() == ["-1017 Not in position control mode: Robot 1", "-717 Invalid number format",
+                                "-704 Missing quote mark", "-1001 Undefined robot"]
+
+
+def test_a_new_locations_zclearance_is_not_set(tmp_path):
+    """Brooks error list -794 *ZClearance property not set*: "When a Location is first
+    created, its ZClearance property is set to a very large number" and Move.Approach to
+    it is this error (the TCP Command Server 3.0 tests `ZClearance > 1E30` before a pick);
+    GDE-generated files write 1E+32 for it."""
+    report = on_cell(tmp_path, """
+        Dim nest As New Location
+        Dim p As New Profile
+        Dim ex As Exception
+        Controller.PowerEnabled = True
+        Robot.Attached = 1
+        Robot.Home
+        nest = Robot.Where
+        Console.WriteLine(CStr(nest.ZClearance > 1E30) & " " & CStr((New Location).ZClearance))
+        Try
+            Move.Approach(nest, p)
+        Catch ex
+            Console.WriteLine(CStr(ex.ErrorCode) & " " & ex.Message)
+        End Try
+        nest.ZClearance = 20
+        Move.Approach(nest, p)
+        Move.WaitForEOM
+        Console.WriteLine(Format(Robot.Where.Z - nest.Z, "0.0"))
+""")
+    assert report.errors == []
+    lines = report.output.splitlines()
+    assert lines[:2] == ["True 1E+32", "-794 ZClearance property not set"]
+    assert abs(abs(float(lines[2])) - 20.0) < 0.2
+
+
+def test_a_class_shared_init_runs_at_start_up():
+    """A class's `Private Shared Sub Init()` runs at start-up, before the modules' Init
+    subs and the start procedure: the TCP Command Server 3.0's GpoFile class fills its
+    Shared type-name tables so ("Init routine called automatically at startup"); manual
+    ch. 10 "Special Initialization" describes the module case."""
+    out = output_of("""
+Public Class Names
+    Public Const LAST As Integer = 2
+    Private Shared Label(LAST) As String
+    Private Shared Sub Init()
+        Label(1) = "Integer"
+        Label(2) = "Location"
+        Console.WriteLine("class init")
+    End Sub
+    Public Shared Function Of(ByVal i As Integer) As String
+        Return Label(i)
+    End Function
+End Class
+Module M
+    Public Sub Init()
+        Console.WriteLine("module init " & Names.Of(2))
+    End Sub
+    Public Sub Main()
+        Console.WriteLine(Names.Of(1))
+    End Sub
+End Module
+""")
+    assert out.splitlines() == ["class init", "module init Location", "Integer"]

@@ -119,7 +119,7 @@ def test_a_part_carried_past_the_conveyor_limit_is_an_error():
         Thread.Sleep(20000)
 """, max_time=30.0)
     (error,) = outcome.errors
-    assert error["code"] == -3150
+    assert error["code"] == -1053
 
 
 def test_a_joint_motion_to_a_conveyor_location_is_an_error():
@@ -127,7 +127,7 @@ def test_a_joint_motion_to_a_conveyor_location_is_an_error():
         pf.Straight = False
         Move.Loc(part, pf)
 """)
-    assert outcome.errors[0]["code"] == -3151
+    assert outcome.errors[0]["code"] == -1011
 
 
 def test_conveyor_robot_must_be_a_belt():

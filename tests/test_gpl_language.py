@@ -258,7 +258,7 @@ End Sub
 """
     system, thread = run_gpl(source)
     assert lines(system.console.output) == ["10 81 20 2 7", "100 4 0", "20 0"]
-    assert thread.error.code == -704 and thread.error.line == 17 and thread.error.column == 5
+    assert thread.error.code == -767 and thread.error.line == 17 and thread.error.column == 5
 
 
 def test_string_members_and_functions():
@@ -312,8 +312,8 @@ End Sub
     assert lines(out) == [
         "42 2.5 False True 255 -32768 2 4",
         "-2 -3 4 1 4 2 45",
-        "-703 Numeric overflow: 256 as Byte",
-        "-703",
+        "-708 Value infinite or NAN: 256 as Byte",
+        "-708",
     ]
 
 
@@ -359,7 +359,7 @@ Sub Main()
 End Sub
 """)
     assert lines(out) == [
-        "finally", "caught -702 Divide by zero", "before", "finally 2", "inner -786",
+        "finally", "caught -709 Division by 0", "before", "finally 2", "inner -786",
         "outer -786 Project generated error",
     ]
 
@@ -388,7 +388,7 @@ Module Cell
     End Sub
 End Module
 """)
-    assert (error.code, error.file, error.line, error.column) == (-705, "test.gpl", 8, 9)
+    assert (error.code, error.file, error.line, error.column) == (-782, "test.gpl", 8, 9)
     assert error.program == "Cell.Step2" and "loc.X" in error.text
 
 
@@ -471,7 +471,7 @@ Sub Main()
     Console.WriteLine(Me Is Nothing)
 End Sub
 """)
-    assert error.code == -709
+    assert error.code == -787
 
 
 def test_syntax_error_has_file_line_column_and_text():
@@ -651,9 +651,9 @@ def test_twin_run_project_folder(tmp_path, capsys):
     code = main(["run", str(tmp_path), "--report", str(report), "--max-sim-time", "2"])
     captured = capsys.readouterr()
     assert code == 1 and captured.out == "hello\n"
-    assert f"{tmp_path / 'Main.gpl'}:5:9: Divide by zero (-702) in Cell.Main" in captured.err
+    assert f"{tmp_path / 'Main.gpl'}:5:9: Division by 0 (-709) in Cell.Main" in captured.err
     data = json.loads(report.read_text())
-    assert data["output"] == "hello\n" and data["errors"][0]["code"] == -702
+    assert data["output"] == "hello\n" and data["errors"][0]["code"] == -709
 
 
 def test_goto_inside_loops_and_out_of_them():
@@ -706,10 +706,10 @@ def test_exception_object_members():
 Sub Main()
     Dim e As New Exception
     Dim c As Exception
-    e.ErrorCode = -702
+    e.ErrorCode = -709
     e.Qualifier = 3
     c = e.Clone
-    e.UpdateErrorCode(-703)
+    e.UpdateErrorCode(-708)
     Console.WriteLine(e.ErrorCode & " " & e.Message & " | " & c.ErrorCode & " " & c.Qualifier & " " & c.Message)
     e.RobotError = True
     e.RobotNum = 1
@@ -718,8 +718,8 @@ Sub Main()
 End Sub
 """)
     assert lines(out) == [
-        "-703 Numeric overflow | -702 3 Divide by zero",
-        "True 1 4 Numeric overflow: Robot 1: Axis &H4",
+        "-708 Value infinite or NAN | -709 3 Division by 0",
+        "True 1 4 Value infinite or NAN: Robot 1: Axis &H4",
     ]
 
 
@@ -750,7 +750,7 @@ Sub Main()
     c.Bump
 End Sub
 """)
-    assert (error.code, error.line, error.column) == (-705, 10, 5)
+    assert (error.code, error.line, error.column) == (-782, 10, 5)
 
 
 def test_byref_module_variable_is_a_real_reference_across_threads():
@@ -867,7 +867,7 @@ Sub Main()
     Console.WriteLine(x)
 End Sub
 """)
-    assert out == "-702\n6\n"
+    assert out == "-709\n6\n"
     with pytest.raises(ProgramError) as err:
         output_of("""
 Sub Main()

@@ -181,7 +181,7 @@ def test_frame_loop_is_an_error(rt):
     a.Loc.RefFrame = b
     with pytest.raises(GplError) as err:
         b.Loc.RefFrame = a
-    assert err.value.code == -3104
+    assert err.value.code == -809
 
 
 def test_pallet_frame_steps_rows_then_columns_and_wraps(rt):
@@ -214,7 +214,7 @@ def test_cartesian_members_on_angles_location_are_errors(rt):
     for touch in (lambda: loc.X, lambda: loc.Mul(loc), lambda: loc.XYZ(1, 2, 3)):
         with pytest.raises(GplError) as err:
             touch()
-        assert err.value.code == -3100
+        assert err.value.code == -762  # Location not a Cartesian type
     with pytest.raises(GplError):
         xyz(rt, 1, 2, 3).Angle(1)
 
@@ -256,7 +256,7 @@ def test_motion_preconditions(rt):
         yield from attempt(rt)  # homed, detached
 
     rt.run(body)
-    assert expected == [-1600, -1027, -1027, -1009]
+    assert expected == [-1046, -1021, -1021, -1009]
 
 
 def test_only_one_thread_can_attach(rt):
@@ -398,7 +398,7 @@ def test_unreachable_location_is_a_gpl_error(rt):
 
     with pytest.raises(GplError) as err:
         rt.run(body)
-    assert err.value.code == -1025
+    assert err.value.code == -1033
 
 
 def test_tool_offset_applies_to_where_and_moves(rt):
@@ -454,7 +454,7 @@ def frame_inverse_times(rt, frame, where):
 def test_delay_queues_a_pause_and_softestop_stops_the_robot(rt):
     """Move.Delay pauses the motion queue, not the thread (Table 12-5): the call returns
     at once and WaitForEOM waits it out.  A soft E-stop stops the motion short of its
-    destination and turns power off, so the next motion raises -1600."""
+    destination and turns power off, so the next motion raises -1046."""
     got = {}
 
     def body(rt):
@@ -478,7 +478,7 @@ def test_delay_queues_a_pause_and_softestop_stops_the_robot(rt):
     rt.run(body)
     assert got["returned"] == 0.0
     assert 0.5 <= got["ended"] < 0.5 + 0.017
-    assert got["short"] > 50 and got["code"] == -1600
+    assert got["short"] > 50 and got["code"] == -1046
 
 
 def test_profile_values_are_checked_and_cloned(rt):
@@ -501,7 +501,7 @@ def test_nothing_arguments_raise_null_object(rt):
 
     with pytest.raises(GplError) as err:
         rt.run(body)
-    assert err.value.code == -705
+    assert err.value.code == -782
 
 
 # ------------------------------------------------------------ controller, signals, console
@@ -541,7 +541,7 @@ def test_signal_numbers_and_gripper_output(rt):
     assert Signal.DIO(rt, 10001) is False
     with pytest.raises(GplError) as err:
         Signal.set_DIO(rt, 10001, True)
-    assert err.value.code == -3105
+    assert err.value.code == -1517
     with pytest.raises(GplError):
         Signal.DIO(rt, 9999)
     Signal.set_AIO(rt, 2, 3.5)
@@ -709,7 +709,7 @@ def test_file_paths_stay_in_the_sandbox(rt):
     assert err.value.code == -3110
     with pytest.raises(GplError) as err:
         StreamWriter(rt, "/dev/com1")
-    assert err.value.code == -3103
+    assert err.value.code == -204
     File.CreateDirectory(rt, "/flash/a/b")
     assert list(File.GetDirectories(rt, "/flash/a")) == ["b"]
     File.DeleteDirectory(rt, "/flash/a/b")
@@ -863,7 +863,7 @@ def test_udp_datagrams_and_receive_timeout(rt):
 
     rt.run(body)
     assert (got["n"], got["data"], got["reply"]) == (4, "ping", 4)
-    assert got["timeout"][0] == -3121 and 0.2 <= got["timeout"][1] < 0.22
+    assert got["timeout"][0] == -1705 and 0.2 <= got["timeout"][1] < 0.22
 
 
 class _ModbusSlave(socketserver.ThreadingTCPServer):
@@ -965,17 +965,17 @@ def test_modbus_write_and_read_examples(rt, modbus_slave):
     assert got["coils"] == [bool(ii & 2) for ii in range(16)]
     assert got["inputs"] == [n % 2 == 1 for n in range(1, 17)]
     assert got["input_regs"] == [103, 104]
-    assert got["exception"] == -3130
+    assert got["exception"] == -1730
 
 
 def test_hardware_members_say_why_they_are_missing(rt):
-    """What needs hardware the twin lacks raises -3103 with the reason (docs/gpl.md)."""
+    """What needs hardware the twin lacks raises -204 with the reason (docs/gpl.md)."""
     for call, reason in ((lambda: Move.Arc(rt, None, None, None), "circular"),
                          (lambda: CLASSES["latch"].ThreadEvent(rt, 2), "latch thread events"),
                          (lambda: Robot.MotorTempStatus(rt, 1), "temperatures")):
         with pytest.raises(GplError) as err:
             call()
-        assert err.value.code == -3103 and reason in err.value.message
+        assert err.value.code == -204 and reason in err.value.message
 
 
 # ------------------------------------------------------------ through the interpreter

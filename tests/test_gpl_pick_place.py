@@ -65,13 +65,13 @@ def test_motion_without_power_stops_the_thread_with_the_gpl_error(tmp_path):
 """)
     assert len(report.errors) == 1
     error = report.errors[0]
-    assert error["code"] == -1600
+    assert error["code"] == -1046
     assert error["line"] == 7  # Main.gpl: module, Sub, blank line, then the four statements
 
 
 def test_try_catch_retries_a_motion_error(tmp_path):
     """The manual's retry pattern (L1719-1736, E23) on a twin error: an unreachable
-    location raises -1025, the Catch block fixes the destination and jumps back."""
+    location raises -1033, the Catch block fixes the destination and jumps back."""
     report = _run(tmp_path, """
         Dim loc1 As New Location
         Dim profile1 As New Profile
@@ -92,7 +92,7 @@ retry:
         Console.WriteLine("At X = " & CStr(CInt(Robot.Where.X)))
 """)
     assert report.errors == []
-    assert report.output == "Error -1025\nError -1025\nAt X = 500\n"
+    assert report.output == "Error -1033\nError -1033\nAt X = 500\n"
 
 
 def test_pallet_frame_drives_the_robot_through_a_grid(tmp_path):

@@ -1,7 +1,7 @@
 """Bad GPL programs and hostile projects (issue 14): every user error is a located GPL
 error, never a Python traceback.  Wrong argument types to every library member are
 GPL exceptions the program's own Try/Catch catches; sizes are bounded by the
-controller's memory (-711); nesting is bounded (-2014); Project.gpr sources stay in
+controller's memory (-200); nesting is bounded (-2014); Project.gpr sources stay in
 the project folder and are regular files (-2013)."""
 
 from __future__ import annotations
@@ -68,8 +68,8 @@ def member_calls() -> list[str]:
 def test_wrong_argument_kinds_to_every_library_member_are_catchable_gpl_errors(tmp_path):
     """Every member of every built-in class, given a String that is not a number, Nothing
     or an object of another class for each argument, either accepts it or raises a GPL
-    error that the program's own Catch sees (-708 Invalid numeric value, -705 Object is
-    Nothing, -706 Invalid argument or the member's own code): the run ends normally."""
+    error that the program's own Catch sees (-717 Invalid number format, -782 Object is
+    Nothing, -202 Invalid argument or the member's own code): the run ends normally."""
     calls = member_calls()
     assert len(calls) > 500
     body = "".join(f"        Try\n            {c}\n        Catch ex\n            Console.WriteLine(\"{i} \" & ex.ErrorCode)\n"
@@ -87,13 +87,13 @@ def test_wrong_argument_kinds_to_every_library_member_are_catchable_gpl_errors(t
     lines = report.output.splitlines()
     assert lines[-1] == "done"
     codes = {int(line.split()[1]) for line in lines if line[:1].isdigit()}
-    assert {-708, -705, -706} <= codes
+    assert {-717, -782, -202} <= codes
     assert all(code < 0 for code in codes)
 
 
 @pytest.mark.parametrize("statement, code", [
-    ('Thread.Sleep("abc")', -708), ('Signal.DIO("a") = True', -708), ('p.Speed = "fast"', -708),
-    ("p.Speed = Nothing", -2004), ("Move.Loc(p, p)", -706), ('Controller.PDbNum("x")', -708),
+    ('Thread.Sleep("abc")', -717), ('Signal.DIO("a") = True', -717), ('p.Speed = "fast"', -717),
+    ("p.Speed = Nothing", -2004), ("Move.Loc(p, p)", -202), ('Controller.PDbNum("x")', -717),
 ])
 def test_the_issues_examples_are_caught_by_the_programs_own_catch(statement, code):
     out = output_of(f"""
@@ -120,8 +120,8 @@ End Module
     'Dim s As String = "ab"\n        While True\n            s += s\n        End While',
 ])
 def test_runaway_sizes_are_the_controllers_out_of_memory_error(statements):
-    """Arrays above 4,194,304 elements and Strings above 16,777,216 characters are -711
-    *Out of memory* (docs/gpl.md: the twin's bounds for the controller's memory), never a
+    """Arrays above 4,194,304 elements and Strings above 16,777,216 characters are -200
+    *No memory available* (docs/gpl.md: the twin's bounds for the controller's memory), never a
     Python MemoryError; the program's Catch sees it."""
     out = output_of(f"""
 Module M
@@ -134,7 +134,7 @@ Module M
     End Sub
 End Module
 """)
-    assert out == "-711\n"
+    assert out == "-200\n"
 
 
 # ------------------------------------------------------------ nesting and long lines

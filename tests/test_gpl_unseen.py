@@ -70,11 +70,11 @@ def test_motion_errors_reach_catch_with_their_gpl_codes():
     report = _cell_run("motion_error", 20.0)
     assert report.output.splitlines() == [
         "not attached: -1009", "attempt 1 done", "home1 True",
-        "caught -1025: Location out of range", "attempt 2 done", "faraway False",
-        "inner -1025", "outer -1025", "still at X 300"]
+        "caught -1033: Invalid Cartesian value: Location out of range", "attempt 2 done", "faraway False",
+        "inner -1033", "outer -1033", "still at X 300"]
     assert len(report.errors) == 1
     error = report.errors[0]
-    assert (error["code"], error["line"], error["column"]) == (-1025, 51, 9)
+    assert (error["code"], error["line"], error["column"]) == (-1033, 51, 9)
     assert error["file"].endswith("Main.gpl")
 
 
@@ -286,7 +286,7 @@ MALFORMED = [
      -2004, "Main.gpl", 4, 9),
     ("Shared use of an instance member", _main("        Console.WriteLine(Location.X)\n"),
      -2006, "Main.gpl", 3, 27),
-    ("built-in constructor arguments", _main("        Dim p As New Profile(1, 2)\n"), -706, "Main.gpl", 3, 9),
+    ("built-in constructor arguments", _main("        Dim p As New Profile(1, 2)\n"), -202, "Main.gpl", 3, 9),
     ("argument left out of a user Sub",
      _main("        Go(1, , 3)\n", "    Sub Go(ByVal a As Integer, ByVal b As Integer, ByVal c As Integer)\n"
            "    End Sub\n"), -2006, "Main.gpl", 3, 11),
@@ -296,18 +296,18 @@ MALFORMED = [
     ("New of a Shared-only class", _main("        Dim m As New Move\n"), -2006, "Main.gpl", 3, 13),
     # run time
     ("divide by zero", _main("        Dim a As Integer = 0\n        Console.WriteLine(10 / a)\n"),
-     -702, "Main.gpl", 4, 9),
-    ("index out of range", _main("        Dim a(2) As Integer\n        a(3) = 1\n"), -704, "Main.gpl", 4, 9),
-    ("member of Nothing", _main("        Dim loc As Location\n        loc.X = 1\n"), -705, "Main.gpl", 4, 9),
-    ("String that is not a number", _main('        Dim n As Integer = CInt("12a")\n'), -708, "Main.gpl", 3, 9),
-    ("Byte overflow", _main("        Dim b As Byte\n        b = 300\n"), -703, "Main.gpl", 4, 9),
+     -709, "Main.gpl", 4, 9),
+    ("index out of range", _main("        Dim a(2) As Integer\n        a(3) = 1\n"), -767, "Main.gpl", 4, 9),
+    ("member of Nothing", _main("        Dim loc As Location\n        loc.X = 1\n"), -782, "Main.gpl", 4, 9),
+    ("String that is not a number", _main('        Dim n As Integer = CInt("12a")\n'), -717, "Main.gpl", 3, 9),
+    ("Byte overflow", _main("        Dim b As Byte\n        b = 300\n"), -708, "Main.gpl", 4, 9),
     ("endless recursion", _main("        Down(1)\n", "    Sub Down(ByVal n As Integer)\n        Down(n + 1)\n"
-                                "    End Sub\n"), -712, "Main.gpl", 5, 5),
+                                "    End Sub\n"), -755, "Main.gpl", 5, 5),
     ("Throw of an empty Exception", _main("        Dim e As New Exception\n        Throw e\n"),
      -807, "Main.gpl", 4, 9),
     ("Thread of an unknown procedure", _main('        Dim t As New Thread("Nowhere")\n        t.Start()\n'),
-     -710, "Main.gpl", 4, 9),
-    ("Me in a module procedure", _main("        Console.WriteLine(Me Is Nothing)\n"), -709, "Main.gpl", 3, 9),
+     -744, "Main.gpl", 4, 9),
+    ("Me in a module procedure", _main("        Console.WriteLine(Me Is Nothing)\n"), -787, "Main.gpl", 3, 9),
     # project files
     ("missing source file", {"Project.gpr": GPR.replace("ProjectEnd", 'ProjectSource="Gone.gpl"\nProjectEnd'),
                              **_main("")}, -2013, "Project.gpr", 4, 1),

@@ -221,7 +221,7 @@ def _socket_program(statement: str) -> str:
 def test_tcp_connect_to_a_non_loopback_address_is_refused(address):
     system, thread = run_gpl(_socket_program(f'c = New TcpClient(New IPEndPoint("{address}", 80))'))
     assert thread.error is None, thread.error
-    assert system.console.output.strip() == f"refused {codes.SOCKET_ERROR[0]}"
+    assert system.console.output.strip() == f"refused {codes.INVALID_NETWORK_ADDRESS[0]}"
 
 
 @pytest.mark.parametrize("statement", [
@@ -233,7 +233,7 @@ def test_tcp_connect_to_a_non_loopback_address_is_refused(address):
 def test_other_non_loopback_uses_are_refused(statement):
     system, thread = run_gpl(_socket_program(statement))
     assert thread.error is None, thread.error
-    assert system.console.output.strip() == f"refused {codes.SOCKET_ERROR[0]}"
+    assert system.console.output.strip() == f"refused {codes.INVALID_NETWORK_ADDRESS[0]}"
 
 
 @pytest.mark.parametrize("address", ["127.0.0.1", "localhost", "127.0.0.2", ""])

@@ -157,6 +157,8 @@ class Process:
                    channel=channel, latch_encoder=latch, tools=tools)
 
     def tool(self, name: str) -> Tool:
+        if not str(name) and self.tools:  # no name: the default result, the process's last tool
+            return self.tools[-1]
         for t in self.tools:
             if t.name.lower() == str(name).lower():
                 return t

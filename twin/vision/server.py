@@ -248,7 +248,7 @@ class VisionServer:
                 session["buffer"] += chunk
                 while b"\n" in session["buffer"]:
                     line, session["buffer"] = session["buffer"].split(b"\n", 1)
-                    reply = self.handle(session, line.decode("latin-1").strip())
+                    reply = self.handle(session, line.decode("latin-1").rstrip("\r\n"))  # keep an empty last field (no tool)
                     sock.sendall((reply + "\n").encode("latin-1"))
                     answered += 1
         return answered

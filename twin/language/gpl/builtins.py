@@ -235,11 +235,14 @@ def _sqrt(x) -> float:
 
 # ---------------------------------------------------------------- Exception
 def _library_messages() -> dict[int, str]:
-    """The built-in classes' (code, message) pairs (library/codes.py), by code."""
+    """The built-in classes' (code, message) pairs (library/codes.py) and the other
+    controller codes programs throw, by code."""
     from .library import codes
 
-    return {v[0]: v[1] for v in vars(codes).values()
-            if isinstance(v, tuple) and len(v) == 2 and isinstance(v[0], int) and isinstance(v[1], str)}
+    messages = dict(codes.CONTROLLER_MESSAGES)
+    messages.update({v[0]: v[1] for v in vars(codes).values()
+                     if isinstance(v, tuple) and len(v) == 2 and isinstance(v[0], int) and isinstance(v[1], str)})
+    return messages
 
 
 

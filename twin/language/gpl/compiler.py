@@ -92,11 +92,18 @@ class ProjectCompiler:
         init_units, init_subs = self.compile_constants(), []
         for sym in self.module_order:
             init_units.extend(self.compile_module_init(sym))
+        for cls in self.classes:
+            self.compile_class_init(cls)
+            # A class's `Shared Sub Init()` runs at start-up too, before the modules' (the TCP
+            # Command Server 3.0's GpoFile class fills its Shared tables so: "Init routine
+            # called automatically at startup"); the manual (ch. 10) names only modules'.
+            init = cls.methods.get("init")
+            if init is not None and init.kind == "sub" and not init.params and not init.instance:
+                init_subs.append(init.py)
+        for sym in self.module_order:
             init = sym.procs.get("init")
             if init is not None and init.kind == "sub" and not init.params:  # ch. 10 "Special Initialization"
                 init_subs.append(init.py)
-        for cls in self.classes:
-            self.compile_class_init(cls)
         for sym in self.module_order:
             for proc in sym.procs.values():
                 self.compile_procedure(proc)

@@ -16,9 +16,12 @@ class GplError(Exception):
         self.message = message
 
 
-# Error codes.  The User Manual gives only a few (-153, -323, -799, -801 and the
-# compile-time "Undefined symbol"); the others are twin-defined, chosen in the
-# same negative ranges and worded in GPL's style (docs/gpl.md lists them all).
+# Error codes.  The run-time ones are the controller's, from the Brooks error code list
+# (as transcribed in PyLabRobot, pylabrobot/arms/precise_flex/error_codes.py); the User
+# Manual itself gives only -153, -323, -799 and -801.  The compile-time ones (-2001 ...)
+# are twin-defined: a compile error stops the load and no program can catch it, so their
+# numbers matter to no GPL code (the controller's compiler reports -7xx codes such as
+# -712 Invalid syntax and -729 Undefined symbol).  docs/gpl.md lists them all.
 SYNTAX_ERROR = -2001
 UNDEFINED_SYMBOL = -2002
 DUPLICATE_SYMBOL = -2003
@@ -34,19 +37,20 @@ NO_START_PROCEDURE = -2012
 PROJECT_FILE_ERROR = -2013
 TOO_DEEP = -2014
 
-DIVIDE_BY_ZERO = -702
-OVERFLOW = -703
-SUBSCRIPT_RANGE = -704
-NULL_OBJECT = -705
-INVALID_ARGUMENT = -706
-STRING_TOO_LONG = -707
-INVALID_NUMBER = -708
-ME_UNDEFINED = -709
-UNDEFINED_PROCEDURE = -710
-OUT_OF_MEMORY = -711
-STACK_OVERFLOW = -712
-INVALID_EXCEPTION = -807  # GPL Dictionary, Throw of an ErrorCode 0
+OUT_OF_MEMORY = -200  # "No memory available"
+INVALID_ARGUMENT = -202
+OVERFLOW = -708  # "Value infinite or NAN": a value too large for its type, an infinity or a NaN
+DIVIDE_BY_ZERO = -709
+ARITHMETIC_OVERFLOW = -710  # an operation whose result is beyond the Double range
+INVALID_NUMBER = -717  # "Invalid number format": a String that is not a number
+UNKNOWN_SYMBOL_AT_RUN_TIME = -729  # "Undefined symbol": a Delegate made from an unknown procedure name
+UNKNOWN_START_PROCEDURE = -744  # "Invalid start procedure": New Thread of an unknown procedure
+STACK_OVERFLOW = -755  # "Thread stack too small"
+SUBSCRIPT_RANGE = -767  # "Invalid array index"
+NULL_OBJECT = -782  # "Object value is Nothing"
 PROJECT_ERROR = -786  # "Project generated error", reserved for applications
+ME_UNDEFINED = -787  # "Invalid in shared procedure": Me where no object is
+INVALID_EXCEPTION = -807  # Throw of an ErrorCode that is not negative
 
 MESSAGES = {
     SYNTAX_ERROR: "Syntax error",
@@ -63,19 +67,20 @@ MESSAGES = {
     NO_START_PROCEDURE: "Start procedure not found or not Public",
     PROJECT_FILE_ERROR: "Invalid project file",
     TOO_DEEP: "Statement too complex or nested too deeply",
-    DIVIDE_BY_ZERO: "Divide by zero",
-    OVERFLOW: "Numeric overflow",
-    SUBSCRIPT_RANGE: "Array index out of range",
-    NULL_OBJECT: "Object is Nothing",
+    OUT_OF_MEMORY: "No memory available",
     INVALID_ARGUMENT: "Invalid argument",
-    STRING_TOO_LONG: "String too long",
-    INVALID_NUMBER: "Invalid numeric value",
-    ME_UNDEFINED: "Me is not defined in this procedure",
-    UNDEFINED_PROCEDURE: "Undefined procedure",
-    OUT_OF_MEMORY: "Out of memory",
-    STACK_OVERFLOW: "Stack overflow: too many nested procedure calls",
-    INVALID_EXCEPTION: "Invalid exception",
+    OVERFLOW: "Value infinite or NAN",
+    DIVIDE_BY_ZERO: "Division by 0",
+    ARITHMETIC_OVERFLOW: "Arithmetic overflow",
+    INVALID_NUMBER: "Invalid number format",
+    UNKNOWN_SYMBOL_AT_RUN_TIME: "Undefined symbol",
+    UNKNOWN_START_PROCEDURE: "Invalid start procedure",
+    STACK_OVERFLOW: "Thread stack too small",
+    SUBSCRIPT_RANGE: "Invalid array index",
+    NULL_OBJECT: "Object value is Nothing",
     PROJECT_ERROR: "Project generated error",
+    ME_UNDEFINED: "Invalid in shared procedure",
+    INVALID_EXCEPTION: "Invalid exception",
 }
 
 

@@ -18,7 +18,7 @@ from ...errors import ProgramError
 from . import ast
 from .builtins import FUNCTION_TYPES, FUNCTIONS, STRING_MEMBERS, STRING_SHARED
 from .errors import (
-    SYNTAX_ERROR, CONSTANT_ASSIGNMENT, INVALID_STATEMENT, PRIVATE_SYMBOL, TYPE_MISMATCH, UNDEFINED_PROCEDURE,
+    SYNTAX_ERROR, CONSTANT_ASSIGNMENT, INVALID_STATEMENT, PRIVATE_SYMBOL, TYPE_MISMATCH,
     UNDEFINED_SYMBOL, UNSUPPORTED, WRONG_ARGUMENT_COUNT,
 )
 from .library import CLASSES, member as library_member
@@ -39,7 +39,8 @@ CONSTANTS = {
 }
 
 # Stores of an operator's result in an Integer or a Double check its range inline (a call
-# costs more): out of range (or a NaN) is -703 *Numeric overflow* (L1156).
+# costs more): out of range is -708 *Value infinite or NAN* for an Integer, -710 *Arithmetic
+# overflow* for a Double (L1156; codes of the Brooks error list).
 _RANGE_CHECKS = {
     "integer": "(_v if -2147483648 <= (_v := {0}) <= 2147483647 else _overflow(_v, 'Integer'))",
     "double": "(_v if -1.7976931348623157e308 <= (_v := {0}) <= 1.7976931348623157e308 else _overflow(_v, 'Double'))",
@@ -277,7 +278,7 @@ class ExpressionCompiler(Scope):
         if base in CONVERT:
             if vt is not None and not vt.rank and vt.base == base:
                 if code in self.arithmetic and base in _RANGE_CHECKS:
-                    return _RANGE_CHECKS[base].format(code)  # Integer overflow / Double overflow: -703
+                    return _RANGE_CHECKS[base].format(code)  # Integer overflow -708 / Double overflow -710
                 return code
             if base == "double" and vt is not None and vt.is_number and vt.base != "single":
                 if vt.base == "double":
@@ -436,7 +437,7 @@ class ExpressionCompiler(Scope):
             ocode, ot = self.expr_or_ns(target.obj)
             if ot is not None and ot.base == "ns":
                 if isinstance(ot.ref, (ModuleSym, ClassSym)) and ot.ref.member(target.key) is None:
-                    raise self.fail(UNDEFINED_PROCEDURE, f"{ot.ref.name}.{target.name}", target)
+                    raise self.fail(UNDEFINED_SYMBOL, f"{ot.ref.name}.{target.name}", target)
                 proc = self.member_of_namespace(ot.ref, target.key, target)
             elif ot is not None and ot.base == "user":
                 proc = self.class_member(ot.ref, target.key, target)
@@ -445,8 +446,8 @@ class ExpressionCompiler(Scope):
                 raise self.fail(TYPE_MISMATCH, "AddressOf needs a procedure", e)
         elif isinstance(target, ast.Name):
             proc = self.lookup_value(target.key, target)
-            if proc is None:  # what a real controller reports for a procedure it does not have
-                raise self.fail(UNDEFINED_PROCEDURE, target.name, target)
+            if proc is None:
+                raise self.fail(UNDEFINED_SYMBOL, target.name, target)
             if isinstance(proc, ProcSym) and proc.instance and self.me_available:
                 me = "me"
         else:

@@ -24,8 +24,8 @@ from . import builtins, values
 from .compiler import CompiledProject, ProjectCompiler
 from .expressions import library_arity, library_byref
 from .errors import (
-    DIVIDE_BY_ZERO, INVALID_ARGUMENT, INVALID_NUMBER, INVALID_STATEMENT, ME_UNDEFINED, NO_START_PROCEDURE,
-    NULL_OBJECT, OUT_OF_MEMORY, OVERFLOW, TOO_DEEP, STACK_OVERFLOW, TYPE_MISMATCH, UNDEFINED_PROCEDURE, UNDEFINED_SYMBOL, WRONG_ARGUMENT_COUNT,
+    ARITHMETIC_OVERFLOW, DIVIDE_BY_ZERO, INVALID_ARGUMENT, INVALID_NUMBER, INVALID_STATEMENT, ME_UNDEFINED, NO_START_PROCEDURE,
+    NULL_OBJECT, OUT_OF_MEMORY, OVERFLOW, TOO_DEEP, STACK_OVERFLOW, TYPE_MISMATCH, UNDEFINED_SYMBOL, UNKNOWN_START_PROCEDURE, UNKNOWN_SYMBOL_AT_RUN_TIME, WRONG_ARGUMENT_COUNT,
     GplError, fail, message,
 )
 from . import library as library_package
@@ -327,7 +327,7 @@ def as_gpl_error(err: BaseException) -> GplError | None:
     if isinstance(err, ZeroDivisionError):
         return fail(DIVIDE_BY_ZERO)
     if isinstance(err, OverflowError):
-        return fail(OVERFLOW)
+        return fail(ARITHMETIC_OVERFLOW)
     if isinstance(err, RecursionError):
         return fail(STACK_OVERFLOW)
     if isinstance(err, MemoryError):
@@ -504,11 +504,12 @@ class GplSystem:
             table[key] = ("property", ns.get(prop.getter_py), ns.get(prop.setter_py), not prop.shared)
         return table
 
-    def find_procedure(self, name: str):
-        """A procedure by name at run time: "proc", "module.proc" or "class.proc" (ch. 10)."""
+    def find_procedure(self, name: str, unknown: int = UNKNOWN_SYMBOL_AT_RUN_TIME):
+        """A procedure by name at run time: "proc", "module.proc" or "class.proc" (ch. 10);
+        an unknown name is the error `unknown`."""
         proc = self.compiled.public_procs.get(str(name).strip().lower())
         if proc is None:
-            raise fail(UNDEFINED_PROCEDURE, str(name))
+            raise fail(unknown, str(name))
         return proc
 
     # ---- threads
@@ -534,7 +535,7 @@ class GplSystem:
             fn, me, label = target.fn, target.me, target.name
             steps = [(lambda rt: fn(rt, me)) if me is not None else fn]
         else:
-            proc = self.find_procedure(target)
+            proc = self.find_procedure(target, UNKNOWN_START_PROCEDURE)
             if proc.params:
                 raise fail(INVALID_ARGUMENT, f"thread procedure {proc.name} must have no parameters")
             steps, label = [self.namespace[proc.py]], proc.qualified

@@ -10,7 +10,7 @@ from ...errors import ProgramError
 from . import ast
 from .errors import AMBIGUOUS_SYMBOL, PRIVATE_SYMBOL, TYPE_MISMATCH, UNDEFINED_SYMBOL, UNSUPPORTED, message
 from .library import CLASSES
-from .symbols import BASIC, ClassSym, DelegateSym, ModuleSym, SType, is_public
+from .symbols import BASIC, ClassSym, DelegateSym, ModuleSym, SType, VarSym, is_public
 
 if TYPE_CHECKING:
     from .compiler import ProjectCompiler
@@ -105,6 +105,12 @@ class Scope:
             for c in module.classes.values():
                 if c.key == key and (c.public or module is self.module):
                     return c
+        shared = [c.member(key) for c in self.project.classes]
+        shared = [v for v in shared if isinstance(v, VarSym) and v.kind == "shared" and v.public]
+        if len(shared) > 1:
+            raise self.fail(AMBIGUOUS_SYMBOL, key, node)
+        if shared:  # a class's Public Const / Shared variable, unqualified where it is unique
+            return shared[0]
         if key in CLASSES:
             return CLASSES[key]
         return None

@@ -15,7 +15,7 @@ import itertools
 import math
 import struct
 
-from .errors import DIVIDE_BY_ZERO, INVALID_NUMBER, OUT_OF_MEMORY, OVERFLOW, SUBSCRIPT_RANGE, TYPE_MISMATCH, fail
+from .errors import ARITHMETIC_OVERFLOW, DIVIDE_BY_ZERO, INVALID_NUMBER, OUT_OF_MEMORY, OVERFLOW, SUBSCRIPT_RANGE, TYPE_MISMATCH, fail
 
 # The controller's memory, as limits (docs/gpl.md): an array has at most this many
 # elements, a String at most this many characters; beyond, -711 *Out of memory*.
@@ -177,8 +177,11 @@ def _cdbl(v) -> float:
 
 
 def _overflow(v, kind: str):
-    """A stored operator result out of its type's range (expressions.py _RANGE_CHECKS)."""
-    raise fail(OVERFLOW, f"{format_number(v)} as {kind}")
+    """A stored operator result out of its type's range (expressions.py _RANGE_CHECKS): beyond
+    the Double range it is -710 *Arithmetic overflow*, else (an Integer too large, a NaN)
+    -708 *Value infinite or NAN*."""
+    code = ARITHMETIC_OVERFLOW if kind == "Double" and v == v else OVERFLOW
+    raise fail(code, f"{format_number(v)} as {kind}")
 
 
 def format_number(v) -> str:
@@ -224,8 +227,8 @@ def format_value(v) -> str:
     if t is int:
         return str(v)
     if t is float or t is Single:
-        if not -DOUBLE_MAX <= v <= DOUBLE_MAX:
-            raise fail(OVERFLOW, f"{format_number(v)} as a Double")
+        if not -DOUBLE_MAX <= v <= DOUBLE_MAX:  # an operation's infinity (-710) or a NaN (-708)
+            raise fail(ARITHMETIC_OVERFLOW if v == v else OVERFLOW, f"{format_number(v)} as a Double")
         digits = 7 if t is Single else 15  # a Single shows 0.1, not 0.100000001490116
         if v.is_integer() and abs(v) < 10 ** digits:
             return str(int(v))
@@ -281,7 +284,7 @@ def _div(a, b) -> float:
     quotient = _num(a) / b
     if -DOUBLE_MAX <= quotient <= DOUBLE_MAX:
         return quotient
-    raise fail(OVERFLOW, f"{_num(a)} / {b}")
+    raise fail(ARITHMETIC_OVERFLOW, f"{_num(a)} / {b}")
 
 
 def _idiv(a, b) -> int:
@@ -306,13 +309,13 @@ def _mod(a, b):
 def _pow(a, b) -> float:
     a, b = _num(a), _num(b)
     if a < 0 and not float(b).is_integer():
-        raise fail(INVALID_NUMBER, f"{a} ^ {b}: a negative base needs an integer power")
+        raise fail(OVERFLOW, f"{a} ^ {b}: a negative base needs an integer power")
     try:
         return float(a) ** b
     except ZeroDivisionError:
         raise fail(DIVIDE_BY_ZERO) from None
     except OverflowError:
-        raise fail(OVERFLOW) from None
+        raise fail(ARITHMETIC_OVERFLOW) from None
 
 
 def _bits(v) -> int:

@@ -10,12 +10,13 @@ Decisions (docs/gpl.md, "Built-in classes"):
 * ``New Location`` is Cartesian at all zeros; setting ``Type`` keeps nothing of
   the old data (the values become zeros of the new type); conversion between
   the types is ``Kinesol``.
-* Cartesian-only members on an Angles location (and ``Angle`` on a Cartesian
-  one) raise -3100.
+* Cartesian-only members on an Angles location raise -762, ``Angle`` on a
+  Cartesian one -763.
 * Approach point (Move.Approach): with ``ZWorld`` True the total position raised
   by ZClearance along world +Z; with ZWorld False (default) ZClearance back
   along the location's own tool Z, ``Pos * Trans(0, 0, -ZClearance)`` (like V+
-  APPRO), which is above the part for a tool pointing down (pitch 180).
+  APPRO), which is above the part for a tool pointing down (pitch 180).  A new
+  Location's ZClearance is 1E+32, "not set": Move.Approach to it is -794.
 * Pallet frames step along Loc's X (rows), Y (columns), Z (layers); PalletOrder
   0-5 is the GPL Dictionary's code of the stepping order, default 0 (row first).
 """
@@ -38,7 +39,8 @@ MAX_FRAME_DEPTH = 32
 # RefFrame.PalletOrder (GPL Dictionary): the dimensions (0 row, 1 column, 2 layer) in the
 # order PalletNextPos increments them; 0 (row, column, layer) is a new pallet's.
 PALLET_ORDERS = ((0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0))
-NO_CLEARANCE = 1e32  # what GDE-generated .gpo files write for "no clearance" (digest §8.2)
+NO_CLEARANCE = 1e32  # a new Location's ZClearance: what GDE-generated .gpo files write for "not set" (digest §8.2)
+UNSET_CLEARANCE = 1e30  # from here up a ZClearance is "not set" (the TCP Command Server 3.0 tests > 1E30)
 
 
 def _number(value) -> float:
@@ -59,7 +61,7 @@ class GplLocation:
         self._frame: GplRefFrame | None = None
         self._config = 0
         self._text = ""
-        self._zclearance = 0.0
+        self._zclearance = NO_CLEARANCE
         self._zworld = False
 
     @classmethod
@@ -83,11 +85,11 @@ class GplLocation:
     # ------------------------------------------------------------ checks
     def _cartesian(self) -> None:
         if self._type != CARTESIAN:
-            raise codes.fail(codes.WRONG_LOCATION_TYPE, "needs a Cartesian Location")
+            raise codes.fail(codes.NOT_CARTESIAN, "needs a Cartesian Location")
 
     def _angles_type(self) -> None:
         if self._type != ANGLES:
-            raise codes.fail(codes.WRONG_LOCATION_TYPE, "needs an Angles Location")
+            raise codes.fail(codes.NOT_ANGLES, "needs an Angles Location")
 
     # ------------------------------------------------------------ poses
     def total(self) -> Location:
@@ -289,8 +291,8 @@ class GplLocation:
     def clearance(self) -> Location:
         """The approach position of a Cartesian location (see the module docstring)."""
         pose = self.total()
-        if self._zclearance >= NO_CLEARANCE:
-            return pose
+        if self._zclearance >= UNSET_CLEARANCE:  # Brooks error list -794: "set to a very large number"
+            raise codes.fail(codes.ZCLEARANCE_NOT_SET)
         if self._zworld:
             return pose.shifted(dz=self._zclearance)
         return pose * trans(z=-self._zclearance)

@@ -94,7 +94,7 @@ class Modbus:
             data = sock.recv(4096)
             if not data:
                 self.Close()
-                raise codes.fail(codes.SOCKET_ERROR, "the Modbus slave closed the connection")
+                raise codes.fail(codes.CONNECTION_CLOSED, "the Modbus slave closed the connection")
             self._buffer += data
         transaction, _, _, _, answer = frame
         if answer[0] == function | 0x80:

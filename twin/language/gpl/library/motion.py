@@ -129,6 +129,14 @@ def destination_joints(rt) -> np.ndarray:
     return state.dest_q
 
 
+def _start_joints(rt) -> np.ndarray:
+    """Joints where the next motion starts (Robot.SourceAngles): the last destination's; a
+    destination on a moving belt has none fixed, so the joints commanded now."""
+    if isinstance(rt.robot.destination(), Location):
+        return np.array(destination_joints(rt))
+    return np.array(rt.robot.q_command)
+
+
 def _settle(rt):
     try:
         yield from rt.robot.wait_stopped()
@@ -145,7 +153,7 @@ def _go(rt, flange, profile: GplProfile, righty: bool | None, dest_q: np.ndarray
     robot = rt.robot
     if state.last_in_range > 0:
         yield from _settle(rt)
-    source = robot.destination()
+    source, source_q = robot.destination(), _start_joints(rt)
     robot.set_speed(profile.Speed)  # this motion only
     if righty is not None and not profile.Straight:  # a straight line keeps the configuration
         robot.request_configuration(righty)
@@ -155,7 +163,7 @@ def _go(rt, flange, profile: GplProfile, righty: bool | None, dest_q: np.ndarray
         yield from robot.move(flange, straight=profile.Straight, cp=state.last_in_range < 0)
     except ProgramError as err:
         raise codes.from_controller(err) from None
-    state.source = source
+    state.source, state.source_q = source, source_q
     state.dest_q = dest_q
     state.last_profile = profile.Clone()
     state.last_in_range = profile.InRange

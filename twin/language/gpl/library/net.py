@@ -74,7 +74,7 @@ class IPEndPoint:
         """The loopback address the twin uses for this endpoint (its port as mapped); a
         non-loopback address is refused (the twin simulates a closed network)."""
         if not _loopback(self._address):
-            raise codes.fail(codes.SOCKET_ERROR, f"{self._address} is not a loopback address "
+            raise codes.fail(codes.INVALID_NETWORK_ADDRESS, f"{self._address} is not a loopback address "
                              "(the twin is a closed network: use 127.0.0.1)")
         return LOOPBACK, real_port(self._port)
 
@@ -118,7 +118,7 @@ class Socket:
 
     def _s(self) -> socket.socket:
         if self._sock is None:
-            raise codes.fail(codes.SOCKET_ERROR, "the socket is closed")
+            raise codes.fail(codes.SOCKET_NOT_OPEN, "the socket is closed")
         return self._sock
 
     @property

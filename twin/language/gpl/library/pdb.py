@@ -6,11 +6,15 @@ Signatures (GPL Dictionary, Controller.PDb / Controller.PDbNum):
 array_index defaults to 0 for PDb (all the values, comma separated) and to 1 for
 PDbNum (the first value); key (protection override) is accepted and ignored.
 
-Only the DataIDs below exist in the twin; any other one is the controller's
-error for an undefined DataID.  Each entry says where its number comes from
-(the User Manual's lines, or the public Parameter Database reference).  The
-robot entries (2000-3999, 16000-17999) belong to robot `unit`: the twin has
-robot 1 only.  docs/gpl.md lists them.
+Only the DataIDs below exist in the twin; any other one is -1501 *Unknown Data ID
+code*, as on the controller.  Each entry says where its number and label come from:
+"manual Lnnn" (gpl-user-manual.txt), "PDB" (the public Parameter Database reference,
+www2.brooksautomation.com/Controller_Software/Software_Reference/PDB), "Dictionary"
+(the GPL Dictionary page of Controller.PDb) or ".pac" (the configuration files a
+PreciseFlex 400 running GPL 4.2J2 saved, public in github.com/AD-SDL/pf400_module_ros,
+resources/config_files/Configuration_Backups: controller.pac, robot01.pac, calib01.pac,
+gpl_vars.pac, which list each DataID with its label).  The robot entries (2000-3999,
+16000-17999) belong to robot `unit`: the twin has robot 1 only.  docs/gpl.md lists them.
 """
 
 from __future__ import annotations
@@ -22,9 +26,10 @@ import numpy as np
 
 from . import codes
 from .args import integer, number, text
-from .state import check_robot, robot_state
+from .state import robot_state
 
 READ_ONLY, READ_WRITE = True, False
+SERVO_EXPERT_COMMANDS = (14000, 14999)  # PDB intro's DataID groups; the TCS brake commands use 14002, 14500
 
 
 @dataclass(frozen=True)
@@ -36,6 +41,9 @@ class Entry:
     read_only: bool = False
     robot: bool = False  # a robot parameter (unit = robot number)
     live: bool = False  # a state, read anew each time (not a setting kept from boot)
+    # A value the controller itself holds (rt, values) -> None: writing the DataID sets it
+    # there too, and `default` reads it back, so both ways of setting it agree.
+    store: Callable[[Any, list], None] | None = None
 
 
 def _const(*values) -> Callable[[Any], list]:
@@ -111,6 +119,53 @@ def _soft_limits(which: int) -> Callable[[Any], list]:
     return _per_axis(lambda kin: kin.lower, 0)
 
 
+def _each_axis(value) -> Callable[[Any], list]:
+    return lambda rt: [value] * _axes(rt)
+
+
+def _model_number(rt) -> int:
+    """400 for the PreciseFlex 400 model (its robot01.pac value, which the TCP Command
+    Server reads to know the robot), 0 for a robot that is no PreciseFlex."""
+    return 400 if "pf400" in rt.robot.kin.name.lower() else 0
+
+
+def _test_speed(rt) -> list:
+    return [float(rt.robot.settings.monitor_speed)]
+
+
+def _set_test_speed(rt, values: list) -> None:
+    """DataID 601 is what `Controller.SystemSpeed` sets (the Dictionary calls both the
+    system test speed): the controller's monitor speed."""
+    speed = float(values[0])
+    if not 0.0 < speed <= 100.0:
+        raise codes.fail(codes.VALUE_OUT_OF_RANGE, f"test speed {speed:g} (0 < percent <= 100)")
+    rt.robot.set_speed(speed, monitor=True)
+
+
+def _power(rt) -> list:
+    return [robot_state(rt).power]
+
+
+def _set_power(rt, values: list) -> None:
+    """DataID 241 is what Controller.PowerEnabled sets (error -1600: "Power enable" (DataID
+    241) set to FALSE turns power off): at once in the twin; off stops any motion."""
+    state = robot_state(rt)
+    state.power = bool(values[0])
+    if not state.power:
+        rt.robot.stop()
+
+
+def _home_all(rt, values: list) -> None:
+    """Writing 1 to DataID 213 homes every robot (the TCP Command Server's HomeAll):
+    instantaneous, with high power on (else -1046), as Robot.HomeAll."""
+    if values[0]:
+        state = robot_state(rt)
+        if not state.power:
+            raise codes.fail(codes.POWER_OFF)
+        state.homed = True
+    values[0] = 0
+
+
 def _mounted_tool(rt) -> list:
     """The restart tool of the gripper the cell mounts: its TCP in the flange frame (mm), as
     the integrator configures the controller for its tool; none (zeros) without a cell."""
@@ -131,18 +186,35 @@ TABLE: dict[int, Entry] = {
     102: Entry("Hardware version", "str", 1, _const("twin"), READ_ONLY),  # PyLabRobot DataIDs
     103: Entry("Full software version", "str", 1, _const("GPL 4.2 (twin digital twin)"), READ_ONLY),  # PDB
     104: Entry("Software version", "int", 1, _const(4), READ_ONLY),  # PDB
+    # 105, 106: the parts of the version after 104's major number, as the TCP Command Server
+    # 3.0 encodes it (104 * 1000000 + 105 * 10000 + 106); their PDB labels are not public.
+    105: Entry("Software version, minor", "int", 1, _const(2), READ_ONLY),  # TCS 3.0 Globals
+    106: Entry("Software version, revision", "int", 1, _const(0), READ_ONLY),  # TCS 3.0 Globals
+    109: Entry("Controller name", "str", 1, _const("twin")),  # .pac controller
     110: Entry("Controller serial number", "str", 1, _const("TWIN-C0001"), READ_ONLY),  # PyLabRobot DataIDs
+    111: Entry("Number of robots", "int", 1, _const(1), READ_ONLY),  # TCS 3.0 Cmd_SelectRobot (-1001 beyond it)
+    113: Entry("Controller type", "int", 1, _const(10), READ_ONLY),  # PDB (DataID 102: "10 = Next generation controller")
     116: Entry("Robot type", "int", 1, lambda rt: [int(_figure(rt, "robot_type", [0])[0])], READ_ONLY),  # PyLabRobot
-    125: Entry("Serial console enable", "bool", 1, _const(True)),  # manual L2859
+    125: Entry("Serial console enable", "bool", 1, _const(True)),  # manual L2859, .pac controller
+    212: Entry("Auto home at startup", "bool", 1, _const(False)),  # .pac controller; PDB homing setup
+    213: Entry("Home all robots", "int", 1, _const(0), store=_home_all),  # TCS 3.0 Cmd_HomeAll
+    240: Entry("Automatic power on", "bool", 1, _const(False)),  # .pac controller
+    241: Entry("Power enable", "bool", 1, _power, store=_set_power),  # Brooks error list (-1600); TCS 3.0 Cmd_Hp
+    262: Entry("Timeout waiting for power to come on in sec", "num", 1, _const(1.0)),  # .pac controller
     323: Entry("Error log file", "str", 1, _const("")),  # manual L3018
     424: Entry("Vision server IP address", "str", 1, _const("127.0.0.1")),  # manual L3094
-    601: Entry("Test speed", "num", 1, _const(10.0)),  # Dictionary ("test speed" is 601)
+    601: Entry("System wide test speed in %", "num", 1, _test_speed, store=_set_test_speed),  # Dictionary, .pac
+    **{i: Entry("GPL program String", "str", 1, _const("")) for i in range(1800, 1850)},  # .pac gpl_vars
     **{i: Entry(f"GPL program variable {i - 1849}", "num", 1, _const(0.0)) for i in range(1850, 1870)},  # Dictionary
+    1890: Entry("GPL program variable array", "num", 25, _const(*[0.0] * 25)),  # .pac gpl_vars
+    1891: Entry("GPL program variable array", "num", 25, _const(*[0.0] * 25)),  # .pac gpl_vars
     1892: Entry("GPL program NVRAM variable array", "int", 8, _const(*[0] * 8)),  # manual L3034
     234: Entry("Power state", "int", 1, lambda rt: [_power_state(rt)], READ_ONLY, live=True),  # PyLabRobot DataIDs
     2000: Entry("Number of axes", "int", 1, lambda rt: [_axes(rt)], READ_ONLY, robot=True),  # PDB
     2002: Entry("Robot Name", "str", 1, _const("Robot 1"), robot=True),  # PDB
     2003: Entry("Axis Mask", "int", 1, lambda rt: [_axis_mask(rt)], READ_ONLY, robot=True),  # PDB
+    2007: Entry("Robot model number or version", "int", 1, lambda rt: [_model_number(rt)], READ_ONLY,
+                robot=True),  # .pac robot
     2004: Entry("Number of extra, non-servoed, axes", "int", 1, _const(0), READ_ONLY, robot=True),  # robot01.pac
     # The motion references (robot01.pac): per axis, 100 % speeds and accelerations (mm, deg).
     2700: Entry("100% joint speeds", "num", 0, _per_axis(lambda kin: kin.max_velocity, 2), READ_ONLY, robot=True),
@@ -156,10 +228,19 @@ TABLE: dict[int, Entry] = {
                                             (2706, "Max %decel allowed")])},
     2800: Entry("Robot homed", "bool", 1, lambda rt: [robot_state(rt).homed], READ_ONLY, robot=True,
                 live=True),  # PyLabRobot DataIDs; the AD-SDL PF400 driver reads it
+    # Homing (stored: the twin's homing is instantaneous, its encoders absolute)
+    2801: Entry("Robot homed DOUT", "int", 1, _const(0), robot=True),  # .pac robot
+    2802: Entry("Homing sequence", "int", 1, _const(2), robot=True),  # .pac robot
+    2803: Entry("Homing method", "int", 0, _each_axis(-9), robot=True),  # .pac robot
+    2810: Entry("Homing order", "int", 12, lambda rt: list(range(1, _axes(rt) + 1)) + [0] * (12 - _axes(rt)),
+                robot=True),  # .pac robot
+    2813: Entry("Timeout on home axis, sec", "num", 1, _const(0.0), robot=True),  # .pac robot
     16000: Entry("Robot serial number", "str", 1, _const("TWIN-0001"), robot=True),  # PDB
     16050: Entry("Kinematic dimensional constants", "num", 16, _link_lengths, READ_ONLY, robot=True),  # PDB
     16051: Entry("Tool set at restart", "num", 6, _mounted_tool, robot=True),  # PDB; the cell's gripper
     16052: Entry("Base set at restart", "num", 6, _const(*[0.0] * 6), robot=True),  # PDB
+    16066: Entry("Dynamic feedforward enable", "bool", 1, _const(False), robot=True),  # .pac calib (no DFF)
+    16071: Entry("Dynamic feedforward default %payload", "num", 1, _const(0.0), robot=True),  # .pac; Robot.Payload
     # The twin's joints stop at one range: its hard stops are its soft limits (a field PF400's are
     # 1-2 units wider, calib01.pac).
     16075: Entry("Joint maximum hard stop limits", "num", 0, _soft_limits(+1), READ_ONLY, robot=True),  # calib01.pac
@@ -179,7 +260,7 @@ class Database:
 
     def of(self, rt, dataid: int) -> tuple[Entry, list]:
         entry = TABLE[dataid]
-        if dataid not in self.values or entry.live:
+        if entry.live or entry.store is not None or dataid not in self.values:
             try:
                 self.values[dataid] = list(entry.default(rt))
             except AttributeError:  # a value taken from the robot model, in a run without a cell
@@ -194,23 +275,33 @@ def database(rt) -> Database:
     return state.pdb
 
 
+def value(rt, dataid: int, index: int = 1):
+    """One value of a DataID, for the library's own members (Robot.Payload, RestartTool)."""
+    return database(rt).of(rt, dataid)[1][index - 1]
+
+
 def _lookup(rt, dataid, unit, unit2) -> tuple[Entry, list]:
-    dataid, unit, unit2 = integer(dataid), integer(unit), integer(unit2)
+    """The entry and values of `dataid`; a unit or sub unit of 0 is the first one, as the
+    controller's own .pac files write "DI: 2000, 0, 0, 0" and the TCP Command Server reads
+    Controller.PdbNum(2000, robot, 0, 0)."""
+    dataid, unit, unit2 = integer(dataid), integer(unit) or 1, integer(unit2) or 1
     entry = TABLE.get(dataid)
+    if entry is None and SERVO_EXPERT_COMMANDS[0] <= dataid <= SERVO_EXPERT_COMMANDS[1]:
+        raise codes.fail(codes.NOT_SUPPORTED, f"DataID {dataid}: servo expert commands (brakes, motors) act on "
+                                              "hardware the twin does not model")
     if entry is None:
-        raise codes.fail(codes.UNDEFINED_DATAID, str(dataid))
-    if entry.robot:
-        check_robot(unit)
-    elif unit != 1:
-        raise codes.fail(codes.INVALID_ARGUMENT, f"DataID {dataid} has unit 1 only, not {unit}")
+        raise codes.fail(codes.UNKNOWN_DATAID, str(dataid))
+    if unit != 1:
+        what = "robot" if entry.robot else "unit"
+        raise codes.fail(codes.INVALID_PARAMETER_INDEX, f"DataID {dataid} ({entry.label}): {what} {unit}")
     if unit2 != 1:
-        raise codes.fail(codes.INVALID_ARGUMENT, f"DataID {dataid}: sub unit {unit2}")
+        raise codes.fail(codes.INVALID_PARAMETER_INDEX, f"DataID {dataid} ({entry.label}): sub unit {unit2}")
     return database(rt).of(rt, dataid)
 
 
 def _element(dataid: int, values: list, index: int) -> int:
     if not 1 <= index <= len(values):
-        raise codes.fail(codes.INVALID_ARGUMENT, f"DataID {dataid} has {len(values)} value(s), not index {index}")
+        raise codes.fail(codes.INVALID_DATA_INDEX, f"DataID {dataid} has {len(values)} value(s), not index {index}")
     return index - 1
 
 
@@ -228,8 +319,10 @@ def read(rt, dataid, unit, unit2, index, numeric: bool):
     index = integer(index)
     if numeric and entry.kind == "str":
         raise codes.fail(codes.INVALID_ARGUMENT, f"DataID {integer(dataid)} ({entry.label}) is not numeric")
-    if index == 0 and not numeric:
-        return ",".join(_shown(entry, v) for v in values)
+    if index == 0:  # PDb: every value; PDbNum (one number): the first
+        if not numeric:
+            return ",".join(_shown(entry, v) for v in values)
+        index = 1
     value = values[_element(integer(dataid), values, index)]
     if numeric:
         return float(value)
@@ -240,17 +333,23 @@ def write(rt, dataid, unit, unit2, index, value, numeric: bool) -> None:
     entry, values = _lookup(rt, dataid, unit, unit2)
     dataid, index = integer(dataid), integer(index)
     if entry.read_only:
-        raise codes.fail(codes.READ_ONLY_DATAID, f"{dataid} ({entry.label})")
+        raise codes.fail(codes.READ_ONLY_DATAID, f"DataID {dataid} ({entry.label})")
     if numeric and entry.kind == "str":
         raise codes.fail(codes.INVALID_ARGUMENT, f"DataID {dataid} ({entry.label}) is not numeric")
     convert = _CONVERT[entry.kind]
+    new = list(values)
+    if index == 0 and numeric:  # PDbNum sets one number: the first
+        index = 1
     if index == 0:  # PDb with every value: a comma separated list
-        items = text(value).split(",") if entry.count != 1 else [value]
+        items = text(value).split(",") if len(values) != 1 else [value]
         if len(items) != len(values):
             raise codes.fail(codes.INVALID_ARGUMENT, f"DataID {dataid} takes {len(values)} value(s)")
-        values[:] = [convert(v.strip() if isinstance(v, str) and entry.kind != "str" else v) for v in items]
-        return
-    values[_element(dataid, values, index)] = convert(value)
+        new = [convert(v.strip() if isinstance(v, str) and entry.kind != "str" else v) for v in items]
+    else:
+        new[_element(dataid, values, index)] = convert(value)
+    if entry.store is not None:
+        entry.store(rt, new)
+    values[:] = new
 
 
 def assign(rt, dataid, rest: tuple, numeric: bool) -> None:

@@ -18,9 +18,12 @@ from .motion import GplProfile, destination_joints
 from .state import check_robot, config_of, robot_state, to_gpl_angles, tool_pose
 
 # Controller.PowerState values, as DataID 234 numbers them (the manual does not list them;
-# PyLabRobot's PreciseFlex DataIDs, pylabrobot/brooks/precise_flex/data_ids.py, do):
-# 7 off, waiting for the enable signal; 20 on, ready for attach; 21 on, a thread attached.
+# PyLabRobot's PreciseFlex DataIDs, pylabrobot/brooks/precise_flex/data_ids.py, do, and the
+# TCP Command Server 3.0 labels them the same): 7 off, waiting for the enable signal; 20 on,
+# ready for attach; 21 on, a thread attached.
 POWER_STATE_OFF, POWER_STATE_ON, POWER_STATE_ATTACHED = 7, 20, 21
+# Robot.TrajState values (TCP Command Server 3.0 state labels).
+TRAJ_HALTED, TRAJ_IDLE, TRAJ_MOVING = 0, 1, 3
 
 
 def power_state(rt) -> int:
@@ -126,6 +129,14 @@ class Robot:
         return GplLocation.cartesian(rt, state.base * source * state.tool)
 
     @shared
+    def SourceAngles(rt, robot=1) -> GplLocation:
+        """Angles at the start of the last motion (manual L2182); before any motion, the
+        present destination's."""
+        check_robot(robot)
+        source_q = robot_state(rt).source_q
+        return GplLocation.angles(rt, to_gpl_angles(rt, destination_joints(rt) if source_q is None else source_q))
+
+    @shared
     def SpeedAngles(rt, robot=1) -> GplLocation:
         """Instantaneous axis speeds (deg/s or mm/s) as an Angles location."""
         check_robot(robot)
@@ -169,28 +180,47 @@ class Robot:
 
     @shared
     def Payload(rt, robot=1) -> float:
+        """The last payload set (percent of the maximum); at restart the controller's
+        "Dynamic feedforward default %payload" (DataID 16071)."""
         check_robot(robot)
-        return robot_state(rt).payload
+        payload = robot_state(rt).payload
+        return float(pdb.value(rt, 16071)) if payload is None else payload
 
     @shared
     def set_Payload(rt, value) -> None:
-        """Kept for reading back; the twin's servo model does not use it (the grasped part's
-        mass is simulated by MuJoCo)."""
-        robot_state(rt).payload = float(value)
+        """0 to 100 percent (console Set Payload); kept for reading back: the twin's servo
+        model does not use it (the grasped part's mass is simulated by MuJoCo)."""
+        percent = number(value)
+        if not 0.0 <= percent <= 100.0:
+            raise codes.fail(codes.VALUE_OUT_OF_RANGE, f"Payload {percent:g} (0 to 100 percent)")
+        robot_state(rt).payload = percent
+
+    @shared
+    def RapidDecel(rt, robot=1) -> None:
+        """`Robot.RapidDecel(robot)` as a statement, as the TCP Command Server 3.0's halt
+        command writes it: stops the motion in progress at once."""
+        check_robot(robot)
+        rt.robot.stop()
 
     @shared
     def set_RapidDecel(rt, value) -> None:
-        """True stops any motion in progress at once."""
+        """`Robot.RapidDecel = True` (manual L2176, a property) stops any motion in progress
+        at once."""
         if value:
             rt.robot.stop()
 
     @shared
     def TrajState(rt, robot=1, selector=0) -> int:
-        """Twin-defined codes: 0 idle, 1 moving.  `Robot.TrajState(robot, n)` as field code
-        writes it: the selector is checked as a number and gives the same state."""
+        """The trajectory state as the TCP Command Server 3.0 labels it: 0 "Halted" (high
+        power off), 1 "Idle", 3 "Position mode - constant" while a motion runs (the twin
+        does not report its accel / decel / blend phases, 2, 5, 4).  `Robot.TrajState(rob,
+        n)` as field code writes it: the selector is checked as a number and gives the
+        same state."""
         check_robot(robot)
         number(selector)
-        return 1 if rt.robot.moving else 0
+        if not robot_state(rt).power:
+            return TRAJ_HALTED
+        return TRAJ_MOVING if rt.robot.moving else TRAJ_IDLE
 
     @shared
     def CartMode(rt, robot=1) -> int:
@@ -233,7 +263,10 @@ class Controller:
             rt.robot.stop()
 
     @shared
-    def PowerState(rt) -> int:
+    def PowerState(rt, mode=0) -> int:
+        """The high power sequence state (power_state); `mode` (GPL Dictionary,
+        Controller.PowerState(mode)) selects nothing else in the twin."""
+        number(mode)
         return power_state(rt)
 
     @shared

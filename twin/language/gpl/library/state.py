@@ -38,10 +38,11 @@ class RobotState:
     selected: int = 1
     base: Location = NULL  # Robot.Base: robot base in the world (GPL "world" = robot frame + Base)
     tool: Location = NULL  # Robot.Tool: tool tip in the flange frame
-    payload: float = 0.0
+    payload: float | None = None  # Robot.Payload; None: not set since restart (DataID 16071)
     last_profile: Any = None
     last_in_range: float = 0.0
     source: Location | None = None
+    source_q: np.ndarray | None = None  # joints at the start of the last motion
     dest_q: np.ndarray | None = None
     messages: list[str] = field(default_factory=list)  # Controller.SystemMessage log
     analog: dict[int, float] = field(default_factory=dict)  # Signal.AIO channels

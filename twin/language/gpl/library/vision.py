@@ -34,7 +34,7 @@ INFO_COUNT = 7
 def _server(rt):
     server = getattr(rt.system, "vision", None)
     if server is None:
-        raise codes.fail(codes.SOCKET_ERROR, "no vision server in this cell (the cell file has no [vision])")
+        raise codes.fail(codes.VISION_CONNECT, "no vision server in this cell (the cell file has no [vision])")
     return server
 
 
@@ -64,14 +64,14 @@ class Vision:
             try:
                 self._sock = socket.create_connection(server.address, timeout=REPLY_TIMEOUT_S)
             except OSError as err:
-                raise codes.fail(codes.SOCKET_ERROR, f"vision server: {err.strerror or err}") from None
+                raise codes.fail(codes.VISION_CONNECT, f"vision server: {err.strerror or err}") from None
         self._sock.sendall(("\t".join(str(w) for w in words) + "\n").encode("latin-1"))
         server.serve()
         while b"\n" not in self._buffer:
             chunk = self._sock.recv(65536)
             if not chunk:
                 self.Disconnect()
-                raise codes.fail(codes.SOCKET_ERROR, "the vision server closed the connection")
+                raise codes.fail(codes.CONNECTION_CLOSED, "the vision server closed the connection")
             self._buffer += chunk
         line, self._buffer = self._buffer.split(b"\n", 1)
         return line.decode("latin-1").split("\t")
@@ -98,13 +98,15 @@ class Vision:
             yield from wait_ms(self._rt, wait * 1000.0)
         self._status = 3
 
-    def ResultCount(self, tool) -> int:
+    def ResultCount(self, tool="") -> int:
+        """The results of `tool`; without one, of the process's default result (its last
+        tool), as the TCP Command Server 3.0 asks `glbVision.ResultCount`."""
         reply = self._request("COUNT", str(tool))
         if reply[0] != "OK":
             raise codes.GplError(int(reply[1]), reply[2])
         return int(reply[1])
 
-    def Result(self, tool, index=1) -> "VisResult":
+    def Result(self, tool="", index=1) -> "VisResult":
         reply = self._request("RESULT", str(tool), int(index))
         result = VisResult(self._rt)
         if reply[0] != "OK":
