@@ -1,6 +1,7 @@
 """Every performance figure of the twin in one table, from one run, each beside its goal
 (issue "Fast on one core"): the demo's real-time factor headless and with the Rerun
-recording, bare MuJoCo stepping of the same model and the ratio twin/bare, interpreter
+recording and with a camera at 10 frames per simulated second, the vision conveyor's,
+bare MuJoCo stepping of the same model and the ratio twin/bare, interpreter
 statements per second, planning time per MOVE and MOVES, memory over a simulated hour,
 start-up time.  Figures are one run's medians and ratios on a shared, noisy machine.
 
@@ -24,6 +25,7 @@ import interpreter  # noqa: E402
 import planning  # noqa: E402
 import realtime  # noqa: E402
 import startup  # noqa: E402
+import vision  # noqa: E402
 
 ROWS: list[tuple[str, str, str, bool | None]] = []  # figure, measured, goal, met (None: no goal)
 
@@ -54,6 +56,10 @@ def main() -> None:
     rtf_rrd = recorded.sim_time_s / recorded.wall_time_s
     row("demo real-time factor, recording", f"{rtf_rrd:.1f}x ({rtf_rrd / rtf - 1:+.0%})",
         "within 20 % of headless", rtf_rrd >= 0.8 * rtf)
+    camera_rtf, _, _ = vision.demo_with_camera(baseline=False)
+    row("demo real-time factor, camera 10 frames/s", f"{camera_rtf:.1f}x", ">= 10x", camera_rtf >= 10)
+    conveyor = vision.conveyor_run().report
+    row("vision conveyor real-time factor (V+, 60 s)", f"{conveyor.sim_time_s / conveyor.wall_time_s:.1f}x")
     bare = realtime.bare_rtf(realtime.demo_model(), headless.sim_time_s)
     row("bare MuJoCo, same model", f"{bare:.1f}x")
     row("ratio twin / bare", f"{rtf / bare:.2f}", ">= 0.8", rtf / bare >= 0.8)

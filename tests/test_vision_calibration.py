@@ -8,9 +8,11 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from twin.physics.camera import TargetPlan
+from conftest import ROOT
+from twin.physics.camera import TargetPlan, cameras_of
+from twin.physics.cell import Cell
 from twin.vision.calibrate import calibrate
-from twin.vision.calibration import CameraModel, solve
+from twin.vision.calibration import PRINCIPAL_STD_PX, CameraModel, solve
 from vision_helpers import CAMERA, build_bench
 
 
@@ -43,6 +45,21 @@ def test_the_camera_it_finds_is_the_camera_of_the_cell(calibrated):
     assert np.abs(result.plane_to_pixels(grid, 8.0) - true.plane_to_pixels(grid, 8.0)).max() < 0.3
 
 
+def test_the_principal_point_is_estimated_where_the_sightings_pin_it_down(calibrated):
+    # The bench's two post heights leave it uncertain (over 1.5 px): held at the centre.
+    result = calibrated[2]
+    assert result.principal == "held" and max(result.principal_std_px) > PRINCIPAL_STD_PX
+    assert (result.K[0, 2], result.K[1, 2]) == ((CAMERA.width - 1) / 2, (CAMERA.height - 1) / 2)
+    # The conveyor camera's three post heights pin it within 1.5 px: estimated, and within
+    # a pixel of the renderer's (a centred pinhole; read here only to check).
+    cell = Cell.from_scene(ROOT / "scenes" / "conveyor_vision.toml")
+    config = cameras_of(cell)[0]
+    belt, _ = calibrate(cell.model, cell.data, config, cell.robot_base_pose())
+    assert belt.principal == "estimated" and max(belt.principal_std_px) <= PRINCIPAL_STD_PX
+    assert np.hypot(belt.K[0, 2] - config.matrix()[0, 2], belt.K[1, 2] - config.matrix()[1, 2]) < 1.0
+    assert belt.residual_mm < 0.2 and belt.residual_max_mm < 0.2
+
+
 def test_the_result_file_round_trips(calibrated, tmp_path):
     result = calibrated[2]
     path = tmp_path / "cam.calib.json"
@@ -50,6 +67,7 @@ def test_the_result_file_round_trips(calibrated, tmp_path):
     loaded = CameraModel.load(path)
     assert np.allclose(loaded.pixels_to_plane([[100.0, 200.0]], 8.0), result.pixels_to_plane([[100.0, 200.0]], 8.0))
     assert loaded.residual_mm == result.residual_mm
+    assert (loaded.principal, loaded.principal_std_px) == (result.principal, result.principal_std_px)
 
 
 def test_pixels_and_plane_are_inverse(calibrated):

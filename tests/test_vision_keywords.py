@@ -105,7 +105,7 @@ def test_gpl_vision_and_visresult_members(tmp_path):
     assert report.errors == []
     assert report.output.splitlines() == [
         "status 0", "status 3 error 0", "count 5", "info 7 0.000 type 0", "id 1 error 0", "threshold 100",
-        "count 0 id -3204", "system Main", "status 2 error -3201", "ip 192.168.0.50"]
+        "count 0 id -3204", "system Main,Wrist", "status 2 error -3201", "ip 192.168.0.50"]
 
 
 def test_gpl_result_count_of_an_unknown_tool_raises(tmp_path):

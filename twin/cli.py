@@ -383,7 +383,8 @@ def _calibrate(args: argparse.Namespace) -> int:
     for config, model, path in done:
         print(f"camera {config.name}: {model.points} target sightings, residual {model.residual_mm:.3f} mm RMS "
               f"({model.residual_max_mm:.3f} mm max, {model.residual_px:.3f} px); focal length "
-              f"{model.K[0, 0]:.1f} px; written to {path}")
+              f"{model.K[0, 0]:.1f} px; principal point {model.principal} ({model.K[0, 2]:.1f}, {model.K[1, 2]:.1f}); "
+              f"written to {path}")
     return 0
 
 

@@ -113,6 +113,12 @@ class TargetPlan:
     rgba: tuple[float, ...] = (0.0, 1.0, 0.0, 1.0)
     hsv_low: tuple[int, int, int] = (45, 170, 60)  # OpenCV HSV range that finds it
     hsv_high: tuple[int, int, int] = (75, 255, 255)
+    # Hand-eye plan of a camera on the robot (twin/vision/handeye.py): the dot plate's world
+    # pose (x, y, z of the top face mm, yaw deg), the flange's yaws, the dots' pitch and radius.
+    plate: tuple[float, ...] | None = None
+    angles: tuple[float, ...] = (0.0,)
+    pitch: float = 10.0
+    dot_radius: float = 3.0
 
     @classmethod
     def from_table(cls, camera: str, table: dict) -> "TargetPlan":
@@ -152,6 +158,43 @@ def add_targets(spec: mujoco.MjSpec, config: CameraConfig) -> None:
                       pos=[0, 0, post + DISC_THICKNESS / 2], material=matte.name, contype=0, conaffinity=0)
 
 
+PLATE_GRID = (4, 11)  # OpenCV's asymmetric circles grid: dots per row, rows
+PLATE_THICKNESS = 0.001  # m
+
+
+def plate_body(camera: str) -> str:
+    return f"camera/{camera}/plate"
+
+
+def plate_dots(plan: "TargetPlan") -> np.ndarray:
+    """The dot centres of the hand-eye plate in its own frame (mm, z 0 on the top face, up;
+    the origin at the grid's centre), in the order cv2.findCirclesGrid reports them.  OpenCV
+    numbers a grid seen from the front with its rows down the board and its z into it, away
+    from the camera: with z up, the rows run along -y."""
+    cols, rows = PLATE_GRID
+    s = plan.pitch
+    pts = np.array([[(2 * j + i % 2) * s, -i * s] for i in range(rows) for j in range(cols)], dtype=float)
+    pts -= (pts.min(axis=0) + pts.max(axis=0)) / 2
+    return np.column_stack([pts, np.zeros(len(pts))])
+
+
+def add_plate(spec: mujoco.MjSpec, config: CameraConfig) -> None:
+    """The hand-eye routine's plate: white, with the grid's dark dots, visual only; a mocap
+    body parked under the floor until the routine lays it at ``plate``."""
+    plan = config.calibration
+    dots = plate_dots(plan) / MM
+    half = (np.ptp(dots[:, :2], axis=0) / 2 + 2.5 * plan.dot_radius / MM)
+    body = spec.worldbody.add_body(name=plate_body(config.name), mocap=True, pos=list(PARKED))
+    white = spec.add_material(name=f"camera/{config.name}/plate_white", specular=0.0, shininess=0.0,
+                              rgba=[0.92, 0.92, 0.9, 1])
+    body.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[half[0], half[1], PLATE_THICKNESS / 2],
+                  pos=[0, 0, -PLATE_THICKNESS / 2], material=white.name, contype=0, conaffinity=0)
+    for x, y, _ in dots:
+        body.add_geom(type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[plan.dot_radius / MM, DISC_THICKNESS / 2, 0],
+                      pos=[x, y, 0.00005 - DISC_THICKNESS / 2], rgba=[0.05, 0.05, 0.06, 1],
+                      contype=0, conaffinity=0)  # flush with the top face (0.05 mm proud: drawn over it)
+
+
 def add_camera(spec: mujoco.MjSpec, config: CameraConfig, scene_path: str | None = None) -> None:
     """Add the camera (its light, its calibration target) to a model being built; enlarge
     the offscreen buffer."""
@@ -167,7 +210,9 @@ def add_camera(spec: mujoco.MjSpec, config: CameraConfig, scene_path: str | None
         spec.worldbody.add_light(name=f"camera/{config.name}/light",
                                  pos=np.array(light["pos"], dtype=float) / MM, dir=[0, 0, -1],
                                  diffuse=light.get("diffuse", [0.5, 0.5, 0.5]), castshadow=False)
-    if config.calibration is not None:
+    if config.calibration is not None and config.calibration.plate is not None:
+        add_plate(spec, config)
+    elif config.calibration is not None:
         add_targets(spec, config)
     vis = spec.visual.global_
     vis.offwidth = max(vis.offwidth, config.width)

@@ -281,6 +281,13 @@ class CameraCalibration(Section):
     plane_z: Finite = 0.0
     radius: Positive = 9.0
     rgba: Rgba = [0.0, 1.0, 0.0, 1.0]
+    # A camera on the robot (mount): the hand-eye routine (twin/vision/handeye.py) moves it
+    # over a dot plate lying at `plate` (world x, y, z of its top face, yaw); x, y, heights
+    # and angles are then the flange's positions, heights and yaws, plane_z the plate's top.
+    plate: Annotated[list[Finite], Field(min_length=4, max_length=4)] | None = None
+    angles: Annotated[list[Finite], Field(min_length=1)] = [0.0]
+    pitch: Positive = 10.0
+    dot_radius: Positive = 3.0
 
 
 class CameraLight(Section):

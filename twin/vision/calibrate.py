@@ -1,6 +1,7 @@
 """The calibration routine of a fixed camera (``twin calibrate``): the robot sets the
 calibration targets down on the grid of ``[camera.calibration]``, the camera takes a
-picture of each, and ``calibration.solve`` fits the camera model.
+picture of each, and ``calibration.solve`` fits the camera model.  A camera on the robot
+(``mount``) is calibrated hand-eye instead (twin/vision/handeye.py).
 
 The twin performs the robot's part by putting each target where the robot would set it
 down (the commanded grid point, robot frame, carried into the world by the robot's base
@@ -72,7 +73,17 @@ def calibrate_scene(scene_path: str | Path, camera: str | None = None) -> list[t
     for config in cameras_of(cell):
         if config.calibration is None or (camera is not None and config.name != camera):
             continue
-        model, _ = calibrate(cell.model, cell.data, config, cell.robot_base_pose())
+        if (config.calibration.plate is None) != (config.mount is None):
+            raise ValueError(f"{scene_path}: camera {config.name!r} calibration: " + (
+                "a camera on the robot (mount) is calibrated hand-eye: give plate = [x, y, z, yaw]"
+                if config.calibration.plate is None else "plate is the hand-eye plan of a camera on the robot "
+                                                         "(give mount)"))
+        if config.mount is not None:  # a camera on the robot: hand-eye, over the plate
+            from .handeye import calibrate_hand_eye
+
+            model, _ = calibrate_hand_eye(cell, config)
+        else:
+            model, _ = calibrate(cell.model, cell.data, config, cell.robot_base_pose())
         path = calibration_file(config, Path(scene_path))
         model.save(path)
         done.append((config, model, path))

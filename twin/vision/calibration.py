@@ -10,9 +10,11 @@ target's offset.  Nothing is read from the simulator but the pictures.
 From the correspondences (3-D point in the robot frame, pixel) OpenCV's ``calibrateCamera``
 estimates the focal length (pixels, square pixels), the radial and tangential distortion
 (k1, k2, p1, p2) and the camera pose in the robot frame, starting from a direct linear
-transform.  The principal point is held at the image centre (the twin's renderer is a
-centred pinhole; a real lens's offset would be estimated with a plate tilted in front of
-the camera, which a SCARA cannot do).  The residual is reported both in pixels
+transform.  The principal point is estimated too when the sightings pin it down (its
+standard deviation from the fit within PRINCIPAL_STD_PX); otherwise it is held at the image
+centre (one view of targets at a few heights often does not: the principal point trades
+off against the camera's tilt; a plate tilted in front of the camera would pin it, which a
+SCARA cannot do).  The residual is reported both in pixels
 (reprojection) and in millimetres: each observed pixel is cast back onto the horizontal
 plane of its target and compared with where the robot put the target.
 
@@ -27,6 +29,8 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+
+PRINCIPAL_STD_PX = 1.5  # the principal point is estimated when known this well (1 sigma, pixels)
 
 
 @dataclass
@@ -44,6 +48,19 @@ class CameraModel:
     residual_max_mm: float = 0.0
     residual_px: float = 0.0
     points: int = 0
+    flange_T: np.ndarray | None = None  # a camera on the robot: its pose in the flange frame (4x4, mm)
+    principal: str = "held"  # the principal point: "estimated", or "held" at the image centre
+    principal_std_px: tuple[float, float] | None = None  # its standard deviations as estimated
+
+    def at_flange(self, flange_mm: np.ndarray) -> "CameraModel":
+        """A camera on the robot with the flange at `flange_mm` (4x4 in the robot frame, mm):
+        the same camera with R, t of that moment."""
+        cam = np.asarray(flange_mm, dtype=float) @ self.flange_T  # camera -> robot
+        R = cam[:3, :3].T
+        return CameraModel(K=self.K, dist=self.dist, R=R, t=-R @ cam[:3, 3], size=self.size,
+                           residual_mm=self.residual_mm, residual_max_mm=self.residual_max_mm,
+                           residual_px=self.residual_px, points=self.points, flange_T=self.flange_T,
+                           principal=self.principal, principal_std_px=self.principal_std_px)
 
     @property
     def center_mm(self) -> np.ndarray:
@@ -79,7 +96,9 @@ class CameraModel:
         return {"K": self.K.tolist(), "dist": self.dist.tolist(), "R": self.R.tolist(),
                 "t_mm": self.t.tolist(), "size": list(self.size),
                 "residual_mm": self.residual_mm, "residual_max_mm": self.residual_max_mm,
-                "residual_px": self.residual_px, "points": self.points}
+                "residual_px": self.residual_px, "points": self.points, "principal": self.principal,
+                **({} if self.principal_std_px is None else {"principal_std_px": list(self.principal_std_px)}),
+                **({} if self.flange_T is None else {"flange_T_mm": self.flange_T.tolist()})}
 
     def save(self, path: str | Path) -> None:
         Path(path).write_text(json.dumps(self.to_dict(), indent=1) + "\n")
@@ -90,7 +109,9 @@ class CameraModel:
         return cls(K=np.array(d["K"]), dist=np.array(d["dist"]), R=np.array(d["R"]),
                    t=np.array(d["t_mm"]), size=tuple(d["size"]), residual_mm=d["residual_mm"],
                    residual_max_mm=d["residual_max_mm"], residual_px=d["residual_px"],
-                   points=d["points"])
+                   points=d["points"], flange_T=np.array(d["flange_T_mm"]) if "flange_T_mm" in d else None,
+                   principal=d.get("principal", "held"),
+                   principal_std_px=tuple(d["principal_std_px"]) if "principal_std_px" in d else None)
 
 
 def find_target(rgb: np.ndarray, hsv_low, hsv_high, min_area_px: float = 20.0) -> np.ndarray | None:
@@ -137,14 +158,23 @@ def solve(points_mm: np.ndarray, pixels: np.ndarray, size: tuple[int, int]) -> C
     if np.ptp(points[:, 2]) < 1.0:
         raise ValueError("calibration needs target poses at two heights or more")
     K0 = _dlt_guess(points, pixels, size)
-    flags = (cv2.CALIB_USE_INTRINSIC_GUESS | cv2.CALIB_FIX_PRINCIPAL_POINT | cv2.CALIB_FIX_ASPECT_RATIO
-             | cv2.CALIB_FIX_K3)
+    flags = cv2.CALIB_USE_INTRINSIC_GUESS | cv2.CALIB_FIX_ASPECT_RATIO | cv2.CALIB_FIX_K3
     criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 200, 1e-12)
-    rms, K, dist, rvecs, tvecs = cv2.calibrateCamera(
-        [points.astype(np.float32)], [pixels.astype(np.float32).reshape(-1, 1, 2)], size, K0,
-        np.zeros(5), flags=flags, criteria=criteria)
+    views = ([points.astype(np.float32)], [pixels.astype(np.float32).reshape(-1, 1, 2)])
+    # The principal point too, when the sightings pin it down (its standard deviation, from
+    # the fit's covariance, within PRINCIPAL_STD_PX); otherwise held at the image centre.
+    rms, K, dist, rvecs, tvecs, std, _, _ = cv2.calibrateCameraExtended(*views, size, K0.copy(), np.zeros(5),
+                                                                        flags=flags, criteria=criteria)
+    principal_std = (float(std[2, 0]), float(std[3, 0]))
+    principal = "estimated"
+    if max(principal_std) > PRINCIPAL_STD_PX or not np.all(np.isfinite(principal_std)):
+        principal = "held"
+        rms, K, dist, rvecs, tvecs = cv2.calibrateCamera(*views, size, K0, np.zeros(5),
+                                                         flags=flags | cv2.CALIB_FIX_PRINCIPAL_POINT,
+                                                         criteria=criteria)
     R, _ = cv2.Rodrigues(rvecs[0])
-    model = CameraModel(K=K, dist=dist.ravel(), R=R, t=tvecs[0].ravel(), size=tuple(size))
+    model = CameraModel(K=K, dist=dist.ravel(), R=R, t=tvecs[0].ravel(), size=tuple(size),
+                        principal=principal, principal_std_px=principal_std)
     errors = np.array([np.linalg.norm(model.pixels_to_plane(px, p[2])[0] - p[:2])
                        for p, px in zip(points, pixels)])
     model.residual_mm = float(np.sqrt(np.mean(errors ** 2)))

@@ -72,6 +72,7 @@ class BlobLocator:
         contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
         s = view.scale
         rows, cols = image.shape
+        unseen = view.unseen()
         found = []
         for contour in contours:
             pts = contour.reshape(-1, 2).astype(np.float32)
@@ -82,6 +83,8 @@ class BlobLocator:
             x0, y0, w, h = cv2.boundingRect(contour)
             if x0 <= 0 or y0 <= 0 or x0 + w >= cols - 1 or y0 + h >= rows - 1:
                 continue  # cut by the edge of the view: not a whole part
+            if unseen[contour[:, 0, 1], contour[:, 0, 0]].any():
+                continue  # cut by the edge of the picture (the view reaches beyond it)
             cx, cy = m["m10"] / m["m00"], m["m01"] / m["m00"]
             angle, width, length = _rectangle(pts, s)
             x, y = view.to_robot([cx, cy])[0]

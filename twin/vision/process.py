@@ -8,6 +8,7 @@
     plane_z = 8.0                 # mm, robot frame: the height of the faces the tools measure
     area = [150.0, -330.0, 450.0, -70.0]   # robot x, y lo and hi, mm: the part of the picture used
     scale = 0.25                  # mm per pixel of the metric view
+    latch_encoder = 1             # optional: each picture latches this belt encoder (a strobe)
       [[vision.process.tool]]
       name = "blobs"
       type = "blob"               # blob | pattern | inspection (parameters: locators.py)
@@ -122,6 +123,7 @@ class Process:
     area: tuple[float, float, float, float]
     scale: float = 0.25
     channel: str = "gray"  # what the tools see: gray, red, green, blue, saturation, value
+    latch_encoder: int | None = None  # the camera's strobe latches this belt encoder at each picture
     tools: list[Tool] = field(default_factory=list)  # tools[0] is the acquisition
     _view: PlaneView | None = field(default=None, repr=False)
 
@@ -130,7 +132,7 @@ class Process:
         table = dict(table)
         name = table.get("name", "?")
         tools = [Tool(ACQUIRE, "acquire")] + [_tool(name, t) for t in table.pop("tool", [])]
-        known = {"name", "camera", "plane_z", "area", "scale", "channel"}
+        known = {"name", "camera", "plane_z", "area", "scale", "channel", "latch_encoder"}
         unknown = sorted(set(table) - known)
         missing = sorted({"name", "camera", "plane_z", "area"} - set(table))
         if unknown or missing:
@@ -147,9 +149,12 @@ class Process:
         channel = str(table.get("channel", "gray"))
         if channel not in CHANNELS:
             raise ValueError(f"vision process {name!r}: channel {channel!r} is not one of {', '.join(CHANNELS)}")
+        latch = table.get("latch_encoder")
+        if latch is not None and (isinstance(latch, bool) or not isinstance(latch, int)):
+            raise ValueError(f"vision process {name!r}: latch_encoder is a belt encoder number, got {latch!r}")
         return cls(name=name, camera=table["camera"], plane_z=float(table["plane_z"]),
                    area=tuple(float(v) for v in table["area"]), scale=float(table.get("scale", 0.25)),
-                   channel=channel, tools=tools)
+                   channel=channel, latch_encoder=latch, tools=tools)
 
     def tool(self, name: str) -> Tool:
         if not str(name) and self.tools:  # no name: the default result, the process's last tool

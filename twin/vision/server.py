@@ -73,6 +73,8 @@ class Run:
     results: dict[str, list[Instance]]
     ready_at: float
     error: int = 0
+    taken_at: float = 0.0  # simulated time of the picture
+    latched: int | None = None  # the belt encoder's count at the picture (latch_encoder)
 
     def status(self, now: float) -> int:
         if now < self.ready_at - 1e-9:
@@ -96,6 +98,8 @@ class VisionServer:
     time_s: float
     clock: object  # () -> simulated seconds
     data: object  # the cell's MjData: what the cameras see
+    encoders: dict = field(default_factory=dict)  # the cell's belt encoders, by number
+    flange: object = None  # () -> the flange pose (4x4, mm, robot frame) from the robot's kinematics
     recorder: object = None
     runs: list[Run] = field(default_factory=list)
     _told: dict[tuple[int, int], bool] = field(default_factory=dict, repr=False)
@@ -116,6 +120,10 @@ class VisionServer:
                 if p.camera not in configs:
                     raise ValueError(f"vision process {p.name!r}: no camera {p.camera!r} "
                                      f"(cameras: {', '.join(configs) or 'none'})")
+                if p.latch_encoder is not None and p.latch_encoder not in cell.encoders:
+                    raise ValueError(f"vision process {p.name!r}: latch_encoder {p.latch_encoder}: the cell has no "
+                                     f"belt encoder {p.latch_encoder} (encoders: "
+                                     f"{', '.join(map(str, sorted(cell.encoders))) or 'none'})")
         except ValueError as err:
             raise SceneError(f"{scene_path}: {err}") from None
         calibrations = {}
@@ -123,7 +131,8 @@ class VisionServer:
             path = None if config.calibration is None else Path(scene_path).parent / config.calibration.file
             calibrations[name] = CameraModel.load(path) if path is not None and path.exists() else None
         return cls(processes=processes, cameras={n: Camera(c, cell.model) for n, c in configs.items()},
-                   calibrations=calibrations, time_s=time_s, clock=lambda: cell.time, data=cell.data)
+                   calibrations=calibrations, time_s=time_s, clock=lambda: cell.time, data=cell.data,
+                   encoders=dict(cell.encoders), flange=lambda: _flange_mm(cell))
 
     # ------------------------------------------------------------------ processes
     def process(self, key) -> Process:
@@ -140,16 +149,26 @@ class VisionServer:
         raise VisionError(NO_PROCESS, repr(key))
 
     def run(self, key) -> Run:
-        """Take the picture now and analyse it; the results are ready after time_s."""
+        """Take the picture now and analyse it; the results are ready after time_s.  With
+        ``latch_encoder`` the picture also latches that belt encoder, at the same simulated
+        instant (the camera's strobe wired to the encoder's latch input): the program reads
+        the count as it reads a photo-eye's (V+ BELT(%b, 2), GPL Conveyor latch)."""
         process = self.process(key)
         camera_model = self.calibrations.get(process.camera)
         if camera_model is None:
             raise VisionError(NOT_CALIBRATED, f"camera {process.camera!r} (run `twin calibrate` on the cell file)")
+        if camera_model.flange_T is not None:  # on the robot: where the flange is now
+            camera_model = camera_model.at_flange(self.flange())
         now = float(self.clock())
         image = self.cameras[process.camera].shoot(self.data)
         view, results = process.run(image.rgb, camera_model)
+        latched = None
+        if process.latch_encoder is not None:
+            encoder = self.encoders[process.latch_encoder]
+            encoder.latch(now, encoder.conveyor.travel_mm())
+            latched = encoder.latches[-1][1]
         run = Run(id=len(self.runs) + 1, process=process, image=image, view=view, results=results,
-                  ready_at=now + self.time_s)
+                  ready_at=now + self.time_s, taken_at=now, latched=latched)
         self.runs.append(run)
         if self.recorder is not None:
             from .overlay import record_run  # drawing only when recording
@@ -295,6 +314,14 @@ class VisionServer:
             self._listener = None
         for camera in self.cameras.values():
             camera.close()
+
+
+def _flange_mm(cell) -> np.ndarray:
+    """The flange pose in the robot frame (mm) as the controller knows it: its kinematics of
+    the joint positions."""
+    T = cell.kinematics.fk(cell.robot_qpos())
+    T[:3, 3] *= 1000.0
+    return T
 
 
 # One result set on the wire: tab-separated fields.

@@ -17,6 +17,7 @@ import numpy as np
 from .calibration import CameraModel
 
 GRID = 8  # view pixels between exactly projected points
+EDGE_PX = 3  # image pixels at the border not trusted to show the scene
 
 
 @dataclass
@@ -27,6 +28,7 @@ class PlaneView:
     hi: tuple[float, float]
     scale: float = 0.25  # mm per view pixel
     _maps: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)
+    _unseen: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -54,6 +56,18 @@ class PlaneView:
     def resample(self, gray: np.ndarray) -> np.ndarray:
         """The view of a grey image (outside the picture: 0)."""
         return cv2.remap(gray, *self.maps(), cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+
+    def unseen(self) -> np.ndarray:
+        """Boolean mask of the view pixels the picture does not cover: outside the image or
+        within EDGE_PX of its border (the lens remap leaves the outermost pixels black),
+        grown by one view pixel: a blob that touches it is cut by the picture's edge."""
+        if self._unseen is None:
+            mx, my = self.maps()
+            w, h = self.camera.size
+            e = EDGE_PX
+            outside = ((mx < e) | (my < e) | (mx > w - 1 - e) | (my > h - 1 - e)).astype(np.uint8)
+            self._unseen = cv2.dilate(outside, np.ones((3, 3), np.uint8)).astype(bool)
+        return self._unseen
 
     def to_robot(self, cr: np.ndarray) -> np.ndarray:
         """View (column, row) points -> robot (x, y) mm."""
