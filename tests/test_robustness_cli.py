@@ -206,6 +206,17 @@ def test_report_replaces_an_older_report(files, capsys):
     assert [p.name for p in files["tmp"].iterdir() if p.name.endswith(".tmp")] == []
 
 
+def test_report_and_recording_get_the_mode_of_an_ordinary_file(files, capsys):
+    report, rrd = files["tmp"] / "mode.json", files["tmp"] / "mode.rrd"
+    previous = os.umask(0o022)
+    try:
+        assert run_cli(capsys, "run", files["program"], "--report", report, "--rrd", rrd).status == 0
+    finally:
+        os.umask(previous)
+    assert stat.S_IMODE(report.stat().st_mode) == 0o644
+    assert stat.S_IMODE(rrd.stat().st_mode) == 0o644
+
+
 def test_report_write_refuses_anything_but_a_regular_file(files):
     report = Report.load(files["report"])
     with pytest.raises(OutputError):

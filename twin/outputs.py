@@ -33,8 +33,17 @@ def temporary_beside(path: str | os.PathLike) -> Path:
     """A fresh temporary file in the target's folder (so the final rename is atomic)."""
     path = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    # mkstemp makes the file 0600; a report or recording is an ordinary output that a CI
+    # artifact step (often another user) must read, so give it the mode open() would.
+    os.fchmod(fd, 0o666 & ~_umask())
     os.close(fd)
     return Path(tmp)
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
 
 
 def replace_output(tmp: str | os.PathLike, path: str | os.PathLike) -> None:
