@@ -32,7 +32,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 
@@ -820,23 +819,17 @@ class VirtualController:
             if self.tracking is not None:
                 self._track()
             return
-        q, qd, qdd = self._anchor, None, None
-        belt, k_belt = None, 0
+        belt, k_belt, active = None, 0, []
         for m in motions:
             k = n - m.start
             if k < 0:
                 continue
-            if not m.started:
-                m.started = True
-                if m.hand is not None:
-                    self.hand(m.hand)
+            self._start(m)
             k = min(k, m.last)
             if m.belt is not None:
                 belt, k_belt = m, k
-            if qd is None:
-                q, qd, qdd = q + m.delta[k], m.qd[k], m.qdd[k]
-            else:
-                q, qd, qdd = q + m.delta[k], qd + m.qd[k], qdd + m.qdd[k]
+            active.append((m, k))
+        q, qd, qdd = self._superpose(active)
         if belt is not None:
             q, qd = self._belt_reference(belt, k_belt, q, qd)
             if q is None:
@@ -847,7 +840,31 @@ class VirtualController:
         if qd is not None:
             self.q_command = q
             self.cell.set_servo(q, qd, qdd)
-        while motions and motions[0].end <= n:
+        self._retire(n)
+
+    def _start(self, motion: _Motion) -> None:
+        """A motion's first step: its hand action (OPENI/CLOSEI...) happens now."""
+        if not motion.started:
+            motion.started = True
+            if motion.hand is not None:
+                self.hand(motion.hand)
+
+    def _superpose(self, active: list) -> tuple:
+        """The references of the motions on the timeline, each at its index (a step or the
+        rows of a chunk): positions from the anchor plus each motion's offset, velocities and
+        accelerations summed; (anchor, None, None) when no motion is active."""
+        q, qd, qdd = self._anchor, None, None
+        for m, i in active:
+            if qd is None:
+                q, qd, qdd = q + m.delta[i], m.qd[i], m.qdd[i]
+            else:
+                q, qd, qdd = q + m.delta[i], qd + m.qd[i], qdd + m.qdd[i]
+        return q, qd, qdd
+
+    def _retire(self, last: int) -> None:
+        """Drop the motions that ended by step `last`, their final offsets into the anchor."""
+        motions = self._motions
+        while motions and motions[0].end <= last:
             done = motions.pop(0)
             self._anchor = self._anchor + done.delta[-1]
             if done.belt is not None:
@@ -871,34 +888,25 @@ class VirtualController:
         n = self.step
         k = min([limit] + [m.start - n for m in motions if m.start > n])
         for m in motions:
-            if m.start == n and not m.started:
-                m.started = True
-                if m.hand is not None:
-                    self.hand(m.hand)
+            if m.start == n:
+                self._start(m)
         active = [m for m in motions if m.start <= n]
         self.step = n + k
         last = n + k - 1
         feed = None
         if active and not all(m.still for m in active):
-            q, qd, qdd = self._anchor, None, None
+            indexed = []
             for m in active:
                 a, b = n - m.start, last - m.start + 1
-                rows = slice(a, b) if b <= m.last + 1 else np.minimum(np.arange(a, b), m.last)
-                if qd is None:
-                    q, qd, qdd = q + m.delta[rows], m.qd[rows], m.qdd[rows]
-                else:
-                    q, qd, qdd = q + m.delta[rows], qd + m.qd[rows], qdd + m.qdd[rows]
+                indexed.append((m, slice(a, b) if b <= m.last + 1 else np.minimum(np.arange(a, b), m.last)))
+            q, qd, qdd = self._superpose(indexed)
             self.q_command = q[-1]
             feed = self.cell.servo_feed(q, qd, qdd)
         elif active:  # standing still on the timeline (DELAY): one reference for the chunk
             q = self._anchor + sum((m.delta[0] for m in active), np.zeros_like(self._anchor))
             self.q_command = q
             self.cell.set_servo(q, np.zeros_like(q), np.zeros_like(q))
-        while motions and motions[0].end <= last:
-            done = motions.pop(0)
-            self._anchor = self._anchor + done.delta[-1]
-        if not motions:
-            self.q_command = self._anchor.copy()
+        self._retire(last)
         return k, feed
 
     def _belt_reference(self, motion: _Motion, k: int, q, qd):
