@@ -120,7 +120,7 @@ CASES = [
     ("negative-part", PICK, "size = [30.0, 30.0, 20.0]", "size = [30.0, 30.0, -20.0]",
      ["part[0].size[2]", "greater than 0", "-20.0"]),
     ("zero-timestep", PICK, "timestep = 0.002", "timestep = 0.0", ["physics.timestep", "greater than 0", "0.0"]),
-    ("negative-check-interval", PICK, "check_interval = 0.01", "check_interval = -0.01",
+    ("negative-check-interval", PICK, "check_interval = 0.016", "check_interval = -0.01",
      ["physics.check_interval", "greater than 0", "-0.01"]),
     ("zero-pool", PICK, "pool = 120", "pool = 0", ["feeder[0].pool", "greater than or equal to 1", "0"]),
     ("negative-speed", PICK, "speed = 200.0", "speed = -200.0", ["conveyor[0].speed", "greater than or equal to 0", "-200.0"]),
@@ -136,7 +136,7 @@ CASES = [
     # huge values
     ("huge-pool", PICK, "pool = 120", "pool = 100000", ["feeder[0].pool", "less than or equal to 10000", "100000"]),
     ("huge-timestep", PICK, "timestep = 0.002", "timestep = 1e300", ["physics.timestep", "less than or equal to", "1e+300"]),
-    ("huge-check-interval", PICK, "check_interval = 0.01", "check_interval = 1e9",
+    ("huge-check-interval", PICK, "check_interval = 0.016", "check_interval = 1e9",
      ["physics.check_interval", "less than or equal to", "1000000000.0"]),
     ("huge-speed", PICK, "speed = 200.0", "speed = 1e300", ["conveyor[0].speed", "less than or equal to", "1e+300"]),
     ("huge-mass", PICK, "mass = 0.05", "mass = 1e300", ["part[0].mass", "less than or equal to", "1e+300"]),

@@ -197,3 +197,27 @@ def test_hole_check_sees_a_line_between_waypoints(kin):
         _segment_clear_of_hole(kin, a, b, righty=True)
     assert info.value.code == JOINT_LIMIT and info.value.joint == 2
     _segment_clear_of_hole(kin, a + [2e-5, 0, 0], b + [2e-5, 0, 0], righty=True)  # just clear: fine
+
+
+def test_planning_does_not_load_pyplot_but_plotting_still_works():
+    """toppra's eager `import matplotlib.pyplot` is deferred (0.45 s of every run that
+    moves the robot); code that plots afterwards gets the real pyplot."""
+    import subprocess
+    import sys
+
+    script = (
+        "import sys\n"
+        "from twin.controller.trajectory import _libs\n"
+        "_libs()\n"
+        "assert 'matplotlib.figure' not in sys.modules, 'pyplot was loaded'\n"
+        "import matplotlib\n"
+        "matplotlib.use('Agg')\n"
+        "import matplotlib.pyplot as plt\n"
+        "fig, ax = plt.subplots()\n"
+        "ax.plot([0, 1], [0, 1])\n"
+        "assert type(fig).__name__ == 'Figure'\n"
+        "print('ok')\n"
+    )
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=False)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "ok"

@@ -137,6 +137,7 @@ class Cell:
             component.bind(m, d, ctx)
         self._check_steps = max(1, round(self.config.physics.check_interval / self.timestep))
         self._steps_to_check = 1
+        self._steps_done = 0  # physics steps since the start: checks keep their phase (`step`)
         # Check order: the gripper first (grasps), the scene's components, collisions, parts.
         # Components without a check of their own (a table, a bin) are not called.
         self._checked = [c for c in (self.gripper, *self.components[2:], self.robot, self.parts)
@@ -227,12 +228,16 @@ class Cell:
                     mujoco.mj_step(m, d)
                 j += k
             n -= k
+            self._steps_done += k
             self._steps_to_check -= k
             if self._steps_to_check <= 0:
                 t = d.time
                 for component in self._checked:
                     component.check(t)
-                self._steps_to_check = 1 if any(c.busy for c in self._busy) else self._check_steps
+                # Every step while busy; else on the interval's own grid (the end of each
+                # controller cycle by default), whatever a busy spell did to the phase.
+                every = self._check_steps
+                self._steps_to_check = 1 if any(c.busy for c in self._busy) else every - self._steps_done % every
 
     def take_collisions(self) -> list[dict]:
         """Collisions recorded since the last call (each is also in `events`)."""

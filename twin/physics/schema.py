@@ -59,7 +59,9 @@ class Physics(Section):
     timestep: Annotated[float, Field(gt=0, le=0.1, allow_inf_nan=False)] = 0.002  # s
     integrator: Literal["implicitfast", "implicit", "euler", "rk4"] = "implicitfast"
     sleep: bool = True
-    check_interval: Annotated[float, Field(gt=0, le=10.0, allow_inf_nan=False)] = 0.01  # s
+    # s; the controller's major cycle: programs see a check's results (signals, events) only
+    # at the next cycle, so checking more often changes nothing they can observe
+    check_interval: Annotated[float, Field(gt=0, le=10.0, allow_inf_nan=False)] = 0.016
     seed: Seed = 0
 
 

@@ -20,6 +20,7 @@ from lark.visitors import Transformer_NonRecursive
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from ...errors import ProgramError
+from ..lalr import lalr_parser
 from . import ast
 from .errors import SYNTAX_ERROR, TOO_DEEP, message
 
@@ -27,7 +28,7 @@ from .errors import SYNTAX_ERROR, TOO_DEEP, message
 @lru_cache(maxsize=1)
 def _parser() -> Lark:
     grammar = files(__package__).joinpath("gpl.lark").read_text()  # packaged beside this module
-    return Lark(grammar, parser="lalr", lexer="contextual", propagate_positions=True, maybe_placeholders=True)
+    return lalr_parser(grammar, "gpl")
 
 
 # A line that ends in one of these goes on on the next line (VB.NET's implicit

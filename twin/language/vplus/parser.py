@@ -17,6 +17,7 @@ from lark import Lark, Token, Transformer_NonRecursive, Tree, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
 
 from ...errors import ProgramError
+from ..lalr import lalr_parser
 from . import ast
 from . import messages as msg
 from .keywords import STRING_FUNCTIONS
@@ -29,7 +30,7 @@ MAX_LABEL = 65535  # step labels are integers 0 to 65535 ([000] L805-808)
 @lru_cache(maxsize=1)
 def _parser() -> Lark:
     grammar = files(__package__).joinpath("vplus.lark").read_text()  # packaged beside this module
-    return Lark(grammar, parser="lalr", lexer="contextual", propagate_positions=True, maybe_placeholders=True)
+    return lalr_parser(grammar, "vplus")
 
 
 def normalize_name(text: str) -> str:

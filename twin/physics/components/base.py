@@ -8,7 +8,7 @@ nothing when nothing changed (the defaults here do nothing):
 * ``build(spec, ctx)``: add bodies, geoms, sites, actuators and sensors to the
   ``mujoco.MjSpec`` (names prefixed with the component's name, so several fit);
 * ``bind(model, data, ctx)``: after compiling, look up the ids the hooks need;
-* ``check(t)``: every check interval (``[physics] check_interval``, 10 ms by default, and
+* ``check(t)``: every check interval (``[physics] check_interval``, 16 ms by default, and
   every physics step while any component's ``busy`` is true): read signals, move belts,
   spawn parts, detect beams, append events to ``ctx.events``;
 * ``report()``: a small JSON-able dict for the run report (``components.<name>``), or None;
