@@ -48,6 +48,7 @@ class Camera:
     _renderer: mujoco.Renderer | None = field(default=None, repr=False)
     _depth: mujoco.Renderer | None = field(default=None, repr=False)
     _distort_map: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)
+    _noise: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)  # noise, sum: reused
 
     @property
     def model_name(self) -> str:
@@ -120,9 +121,16 @@ class Camera:
             rgb = cv2.remap(rgb, *lens, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
         if c.noise == 0.0:
             return rgb
-        rng = np.random.default_rng([int(c.seed), self.frames])
-        out = rgb.astype(np.float32) + rng.standard_normal(rgb.shape, dtype=np.float32) * np.float32(c.noise)
-        return np.clip(np.rint(out), 0, 255).astype(np.uint8)
+        # The same draws and float32 sums as clip(rint(rgb + n * noise)), so the same
+        # pictures, in two reused buffers instead of five temporaries.
+        if self._noise is None:
+            self._noise = (np.empty(rgb.shape, np.float32), np.empty(rgb.shape, np.float32))
+        noise, out = self._noise
+        np.random.default_rng([int(c.seed), self.frames]).standard_normal(dtype=np.float32, out=noise)
+        noise *= np.float32(c.noise)
+        np.add(rgb, noise, out=out)
+        np.rint(out, out=out)
+        return np.clip(out, 0, 255, out=out).astype(np.uint8)
 
     def close(self) -> None:
         for renderer in (self._renderer, self._depth):
