@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import os
 from importlib.resources import files
 
 import pytest
@@ -49,3 +50,26 @@ def test_an_unwritable_cache_directory_is_skipped(tmp_path, monkeypatch):
     blocker.write_text("a file where the cache directory would be")
     monkeypatch.setenv("XDG_CACHE_HOME", str(blocker))
     assert lalr.lalr_parser(GRAMMAR, "vplus").parse(SOURCE) is not None
+
+
+def test_a_cache_that_cannot_be_written_whole_leaves_no_file(tmp_path):
+    """A full disk, made real with a file-size limit: the run goes on without the cache and
+    leaves neither a cache file nor a half-written temporary one."""
+    import subprocess
+    import sys
+
+    script = (
+        "import os, resource, signal\n"
+        "signal.signal(signal.SIGXFSZ, signal.SIG_IGN)\n"
+        "resource.setrlimit(resource.RLIMIT_FSIZE, (4096, 4096))\n"
+        "from importlib.resources import files\n"
+        "from twin.language import lalr\n"
+        "grammar = files('twin.language.vplus').joinpath('vplus.lark').read_text()\n"
+        f"assert lalr.lalr_parser(grammar, 'vplus').parse({SOURCE!r}) is not None\n"
+        "print('ok')\n"
+    )
+    env = {**os.environ, "XDG_CACHE_HOME": str(tmp_path)}
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, check=False)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "ok"
+    assert list((tmp_path / "twin").iterdir()) == []

@@ -42,7 +42,11 @@ def lalr_parser(grammar: str, name: str) -> Lark:
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         with tempfile.NamedTemporaryFile("wb", dir=path.parent, prefix=f".{name}-", delete=False) as f:
-            parser.save(f)
+            try:
+                parser.save(f)
+            except BaseException:  # a full disk: no half-written file left behind
+                os.unlink(f.name)
+                raise
         os.replace(f.name, path)
     except OSError:  # a read-only or full home: run without the cache
         pass
