@@ -108,11 +108,10 @@ class VisionServer:
     _sessions: dict = field(default_factory=dict, repr=False)
 
     @classmethod
-    def for_cell(cls, cell, scene: dict, scene_path: Path) -> "VisionServer | None":
-        """The server of a cell file with a [vision] section (None without one).  Each
-        camera's calibration is read from its plan's file when the file exists."""
-        if "vision" not in scene:
-            return None
+    def for_cell(cls, cell, scene: dict, scene_path: Path) -> "VisionServer":
+        """The server of a cell file's [vision] section (`Simulation` makes one only for a
+        cell that has the section).  Each camera's calibration is read from its plan's file
+        when the file exists."""
         configs: dict[str, CameraConfig] = {c.name: c for c in cameras_of(cell)}
         try:
             processes, time_s = processes_of(scene)
