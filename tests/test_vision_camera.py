@@ -52,6 +52,11 @@ def test_noise_is_seeded_per_frame():
     assert not np.array_equal(first, second)  # the next frame has its own noise
     clean = Camera(replace(CAMERA, noise=0.0), model).shoot(data).rgb.astype(float)
     assert np.std(first - clean) == pytest.approx(CAMERA.noise, rel=0.2)
+    # Each pixel takes a new draw in each frame: the two frames' noise is uncorrelated.
+    unclipped = (clean > 3 * CAMERA.noise) & (clean < 255 - 3 * CAMERA.noise)
+    noise_1, noise_2 = (first - clean)[unclipped], (second - clean)[unclipped]
+    assert abs(np.corrcoef(noise_1, noise_2)[0, 1]) < 0.02
+    assert abs(noise_1.mean()) < 0.05
 
 
 def test_distortion_moves_points_as_the_lens_model_says():

@@ -5,8 +5,12 @@ step.  The renderer is a pinhole with square pixels and the principal point at t
 centre.  The exposure scales every light of the scene as the camera renders it (the light
 that reaches the sensor, before it saturates); lens distortion (OpenCV's k1, k2, p1, p2,
 k3 model) is applied to the rendered image with ``cv2.remap``, then seeded Gaussian noise.  The noise of
-frame n of a camera is drawn from ``default_rng([seed, n])``: the same run gives the same
-images bit for bit.  Headless rendering needs ``MUJOCO_GL=egl`` (Mesa llvmpipe on a machine
+a frame is a window of a bank of Gaussian draws (each rounded to a grey level) made once
+per camera from ``default_rng(seed)``, at an offset drawn for frame n from
+``default_rng([seed, n])``: the same run gives the same images bit for bit, each pixel's
+noise is N(0, noise) as if drawn for it, and a pixel takes a different draw in each frame
+(the pattern repeats across frames only shifted).  Drawing a frame's 921,600 normals was
+10-13 ms a frame on the CPU, the window 0.3 ms.  Headless rendering needs ``MUJOCO_GL=egl`` (Mesa llvmpipe on a machine
 without a GPU) or ``MUJOCO_GL=osmesa``.
 """
 
@@ -48,7 +52,7 @@ class Camera:
     _renderer: mujoco.Renderer | None = field(default=None, repr=False)
     _depth: mujoco.Renderer | None = field(default=None, repr=False)
     _distort_map: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)
-    _noise: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)  # noise, sum: reused
+    _noise: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)  # bank, sum (reused)
 
     @property
     def model_name(self) -> str:
@@ -121,16 +125,17 @@ class Camera:
             rgb = cv2.remap(rgb, *lens, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
         if c.noise == 0.0:
             return rgb
-        # The same draws and float32 sums as clip(rint(rgb + n * noise)), so the same
-        # pictures, in two reused buffers instead of five temporaries.
+        # rgb is integer, so rgb + rint(n * noise) is the rint(rgb + n * noise) of fresh draws.
+        size = rgb.size
         if self._noise is None:
-            self._noise = (np.empty(rgb.shape, np.float32), np.empty(rgb.shape, np.float32))
-        noise, out = self._noise
-        np.random.default_rng([int(c.seed), self.frames]).standard_normal(dtype=np.float32, out=noise)
-        noise *= np.float32(c.noise)
-        np.add(rgb, noise, out=out)
-        np.rint(out, out=out)
-        return np.clip(out, 0, 255, out=out).astype(np.uint8)
+            draws = np.random.default_rng(int(c.seed)).standard_normal(2 * size, dtype=np.float32)
+            draws *= np.float32(c.noise)
+            self._noise = (np.rint(draws).astype(np.int16), np.empty(size, np.int16))
+        bank, total = self._noise
+        offset = int(np.random.default_rng([int(c.seed), self.frames]).integers(size + 1))
+        np.add(rgb.reshape(-1), bank[offset:offset + size], out=total)
+        np.clip(total, 0, 255, out=total)
+        return total.astype(np.uint8).reshape(rgb.shape)
 
     def close(self) -> None:
         for renderer in (self._renderer, self._depth):
