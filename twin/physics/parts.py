@@ -27,7 +27,9 @@ from .geometry import MM
 from .scene import resolve
 
 PARK_Z = -0.5  # m: pooled parts wait under the floor, contacts off, gravity compensated
-FLOOR_CHECK_S = 0.1  # s between checks for parts on the floor / at rest in a bin or tray
+# At least this long between checks for parts on the floor / at rest in a bin or tray: the
+# first component check after it (every 0.112 s with the 16 ms check interval).
+FLOOR_CHECK_S = 0.1  # s
 # A part in a bin slower than this (m/s, and rad/s) ... MuJoCo's soft friction lets a part
 # on a sloping heap creep at a few mm/s and turn at a few hundredths of a rad/s for tens of
 # seconds (measured in the demo's bin: up to 14 such parts awake at once, 3 mm/s, 0.08 rad/s,
