@@ -36,6 +36,12 @@ FLOOR_CHECK_S = 0.1  # s
 # doubling the cost of every step); at these speeds a part in a bin has come to rest.
 RETIRE_SPEED, RETIRE_SPIN = 5e-3, 0.1
 RETIRE_CHECKS = 3  # ... at this many floor checks in a row (0.1 s apart) retires
+# The parts' contact stiffness: an 8 ms time constant (MuJoCo's default is 20 ms, under
+# which a part at rest on the retired heap sank 1.1 mm into it, on the spreader cone 0.9 mm;
+# now 0.07 and 0.2 mm).  MuJoCo averages the two geoms' values, so a part on the table or a
+# bin gets 14 ms.  Stiffer (4 ms, the stiffest a 2 ms step allows) let a part settle in the
+# nest where the closing jaw's finger struck it (docs/performance.md).
+PART_SOLREF = [0.008, 1.0]
 RETIRED_DAMPING = (1e5, 100.0)  # N s/m and N m s/rad on a retired part's free joint (~um/s under a part's weight)
 # Bodies a feeder or source builds per part type, whatever its `pool` asks: every body
 # costs every physics step, asleep or parked (MuJoCo's per-dof work; measured 57 ns a body
@@ -105,7 +111,7 @@ class PartPool(Component):
                 body.sleep = mujoco.mjtSleepPolicy.mjSLEEP_INIT
             body.add_freejoint(name=f"part_{i}_free")
             shape = dict(mass=t.mass, friction=[t.friction, 0.005, 0.0001], contype=0, conaffinity=0,
-                         rgba=t.rgba)
+                         rgba=t.rgba, solref=PART_SOLREF)
             if t.shape == "box":
                 half = np.array(t.size, dtype=float) / MM / 2
                 body.add_geom(name=f"part_{i}_geom", type=mujoco.mjtGeom.mjGEOM_BOX, size=half, **shape)
