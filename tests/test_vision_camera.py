@@ -63,7 +63,7 @@ def test_distortion_moves_points_as_the_lens_model_says():
     plan = CAMERA.calibration
     model, data = build_bench([])
     for config in (CLEAN, replace(CLEAN, distortion=(-0.15, 0.05, 0.001, -0.001, 0.0))):
-        camera = Camera(config, model)
+        camera = Camera(config, model, calibration_targets=True)
         target = model.body_mocapid[model.body("camera/top/target0").id]
         for x, y in ((100.0, 70.0), (-110.0, 40.0), (0.0, 0.0)):
             data.mocap_pos[target] = [x / 1000, y / 1000, 0.0]
@@ -72,6 +72,8 @@ def test_distortion_moves_points_as_the_lens_model_says():
             expected = _true_pixel(model, data, config, [x, y, plan.heights[0]])
             assert np.linalg.norm(seen - expected) < 0.2
         camera.close()
+    # A camera of the running cell does not draw the calibration targets, in view or not.
+    assert find_target(Camera(CLEAN, model).shoot(data).rgb, plan.hsv_low, plan.hsv_high) is None
 
 
 def test_exposure_scales_the_light():

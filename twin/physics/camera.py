@@ -136,6 +136,11 @@ class TargetPlan:
 
 
 PARKED = (0.0, 0.0, -2.0)  # m: where calibration targets wait, under the floor
+# The geom group of the calibration targets and the hand-eye plate: only the calibration
+# routines' pictures draw it.  Parked under the floor they cannot be seen, yet drawing their
+# 48 cylinders was a third of every picture's rendering (MuJoCo's viewer and the recorder
+# draw groups 0-2, so they leave them out too).
+CALIBRATION_GROUP = 5
 DISC_THICKNESS = 0.0004  # m
 
 
@@ -153,9 +158,9 @@ def add_targets(spec: mujoco.MjSpec, config: CameraConfig) -> None:
         body = spec.worldbody.add_body(name=target_body(config.name, k), mocap=True, pos=list(PARKED))
         post = float(h) / MM - DISC_THICKNESS  # the disc's top face is at the post height
         body.add_geom(type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[plan.radius * 1.6 / MM, post / 2, 0],
-                      pos=[0, 0, post / 2], rgba=[0.3, 0.3, 0.32, 1], contype=0, conaffinity=0)
+                      pos=[0, 0, post / 2], rgba=[0.3, 0.3, 0.32, 1], contype=0, conaffinity=0, group=CALIBRATION_GROUP)
         body.add_geom(type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[plan.radius / MM, DISC_THICKNESS / 2, 0],
-                      pos=[0, 0, post + DISC_THICKNESS / 2], material=matte.name, contype=0, conaffinity=0)
+                      pos=[0, 0, post + DISC_THICKNESS / 2], material=matte.name, contype=0, conaffinity=0, group=CALIBRATION_GROUP)
 
 
 PLATE_GRID = (4, 11)  # OpenCV's asymmetric circles grid: dots per row, rows
@@ -188,11 +193,12 @@ def add_plate(spec: mujoco.MjSpec, config: CameraConfig) -> None:
     white = spec.add_material(name=f"camera/{config.name}/plate_white", specular=0.0, shininess=0.0,
                               rgba=[0.92, 0.92, 0.9, 1])
     body.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[half[0], half[1], PLATE_THICKNESS / 2],
-                  pos=[0, 0, -PLATE_THICKNESS / 2], material=white.name, contype=0, conaffinity=0)
+                  pos=[0, 0, -PLATE_THICKNESS / 2], material=white.name, contype=0, conaffinity=0,
+                  group=CALIBRATION_GROUP)
     for x, y, _ in dots:
         body.add_geom(type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[plan.dot_radius / MM, DISC_THICKNESS / 2, 0],
                       pos=[x, y, 0.00005 - DISC_THICKNESS / 2], rgba=[0.05, 0.05, 0.06, 1],
-                      contype=0, conaffinity=0)  # flush with the top face (0.05 mm proud: drawn over it)
+                      contype=0, conaffinity=0, group=CALIBRATION_GROUP)  # flush with the top face (0.05 mm proud: drawn over it)
 
 
 def add_camera(spec: mujoco.MjSpec, config: CameraConfig, scene_path: str | None = None) -> None:

@@ -38,7 +38,7 @@ def calibrate(model: mujoco.MjModel, data: mujoco.MjData, config: CameraConfig,
     scratch = mujoco.MjData(model)
     scratch.qpos[:] = data.qpos
     scratch.time = data.time
-    camera = Camera(config, model)
+    camera = Camera(config, model, calibration_targets=True)
     mocap = [model.body_mocapid[model.body(target_body(config.name, k)).id] for k in range(len(plan.heights))]
     points, pixels, record = [], [], []
     try:

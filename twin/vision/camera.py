@@ -22,7 +22,7 @@ import cv2
 import mujoco
 import numpy as np
 
-from ..physics.camera import CameraConfig
+from ..physics.camera import CALIBRATION_GROUP, CameraConfig
 from ..physics.geometry import MM
 
 
@@ -48,11 +48,16 @@ class Camera:
 
     config: CameraConfig
     model: mujoco.MjModel
+    calibration_targets: bool = False  # draw the calibration targets and plate (the routines' own pictures)
     frames: int = 0
     _renderer: mujoco.Renderer | None = field(default=None, repr=False)
     _depth: mujoco.Renderer | None = field(default=None, repr=False)
     _distort_map: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)
     _noise: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)  # bank, sum (reused)
+    _option: mujoco.MjvOption = field(default_factory=mujoco.MjvOption, repr=False)
+
+    def __post_init__(self) -> None:
+        self._option.geomgroup[CALIBRATION_GROUP] = self.calibration_targets
 
     @property
     def model_name(self) -> str:
@@ -91,7 +96,7 @@ class Camera:
         """The scene as this camera sees it, without shadows: the cell light's shadow map
         costs about 0.25 s a frame on llvmpipe (23 ms without), and a vision cell's lights
         are diffuse anyway."""
-        renderer.update_scene(data, camera=self.model_name)
+        renderer.update_scene(data, camera=self.model_name, scene_option=self._option)
         scene = renderer.scene
         scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
         gain = float(self.config.exposure)

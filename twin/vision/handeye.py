@@ -68,7 +68,7 @@ def calibrate_hand_eye(cell, config: CameraConfig) -> tuple[CameraModel, list[di
     scratch.mocap_quat[mocap] = [math.cos(math.radians(yaw) / 2), 0.0, 0.0, math.sin(math.radians(yaw) / 2)]
     qadr = cell.robot.qadr
     q = cell.robot_qpos()
-    camera = Camera(config, model)
+    camera = Camera(config, model, calibration_targets=True)
     flanges, pixels, record = [], [], []
     try:
         for target in flange_poses(plan):
