@@ -156,6 +156,37 @@ def test_straight_moves_stay_on_the_line_within_limits(kin):
         assert np.all(np.diff(yaw) >= -1e-9) or np.all(np.diff(yaw) <= 1e-9)
 
 
+@pytest.mark.parametrize("length_mm", [0.05, 1.0])
+def test_straight_lines_of_a_fraction_of_a_millimetre_plan_quietly(kin, capfd, length_mm):
+    """toppra cannot time about one line in ten of 0.05 mm on a path parameter in [0, 1]
+    (its bounds on the path speed): such a line is timed on a stretched parameter and
+    still runs straight, reaches its end within the limits, and toppra prints nothing (it
+    logged three warnings on stderr a failure).  The conveyor case is the part arriving
+    0.2 mm from the waiting tool."""
+    rng = np.random.default_rng(3)
+    vmax, amax = kin.max_velocity, kin.max_acceleration
+    for _ in range(60):
+        q0 = _random_q(kin, rng)
+        T1 = kin.fk(q0)
+        direction = rng.normal(size=3)
+        T1[:3, 3] += direction / np.linalg.norm(direction) * length_mm * 1e-3
+        try:
+            kin.ik(T1, q0, righty=True)
+        except KinematicsError:
+            continue  # the end is out of reach or past a limit
+        traj = plan_straight_move(kin, q0, T1, vmax, amax, 0.5)
+        dev, _, _ = _line_deviation(kin, traj, kin.fk(q0)[:3, 3], T1[:3, 3])
+        assert dev < 0.1e-3 * length_mm
+        _check_limits(traj, vmax, amax)
+        assert np.allclose(kin.fk(traj.sample(DT)[1][-1]), T1, atol=1e-9)
+    q0 = np.array([0.7602531818079997, 1.9052235678828384, 0.08300000000000002, 1.0946804228959417])
+    T1 = np.array([[0.00135569619983365, 0.9999990810434847, 0.0, -0.00870234197071118],
+                   [0.9999990810434847, -0.00135569619983365, 0.0, 0.35000070100123176],
+                   [0.0, 0.0, -1.0, 0.2580027434659425], [0.0, 0.0, 0.0, 1.0]])
+    assert 0.0 < plan_straight_move(kin, q0, T1, vmax, amax, 0.5).duration < 0.05
+    assert capfd.readouterr().err == ""
+
+
 def test_straight_move_tcp_speed_limit_governs_long_lines(kin):
     q0 = kin.ik(_pose(0.45, -0.25, 0.30, 0), np.array([0, 1, 0, 0]), righty=True)
     T1 = _pose(0.45, 0.25, 0.30, 0)

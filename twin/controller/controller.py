@@ -48,7 +48,6 @@ COLLISION = -1020  # "*Collision detected*": twin-defined (the real controller d
 # velocity feed-forward follows it within a few hundredths of a mm (measured: a lead of one
 # step puts the tool 0.2 mm ahead of the part at 100 mm/s).
 BELT_LEAD_STEPS = 0
-SHORT_BELT_MOVE_MM = 5.0  # a straight belt motion this short may be planned in joint space
 TRACKING_FINE_MM = 0.1  # FINE while tracking a belt: the flange's distance from its moving target
 # Conveyor tracking errors: the guides name them without codes; twin-chosen (docs/vplus.md).
 BELT_WINDOW_VIOLATION = -1014
@@ -512,19 +511,9 @@ class VirtualController:
         q0 = self.q_command.copy()
         tip, tool = self._tip_matrix_m(_world(target)), self._tool_m()
         try:
-            try:
-                trajectory = plan_straight_move(self.kin, q0, tip, self.kin.max_velocity, self.kin.max_acceleration,
-                                                params.cartesian_speed_m_s, accel=params.accel, decel=params.decel,
-                                                tool=tool)
-            except KinematicsError:
-                # toppra cannot time some straight lines of a few mm (the part arrived under
-                # the waiting tool): so short a joint move stays on the line within 0.01 mm.
-                start_tip = self.kin.fk(q0) @ tool
-                if np.linalg.norm(start_tip[:3, 3] - tip[:3, 3]) * MM > SHORT_BELT_MOVE_MM:
-                    raise
-                q1 = self.kin.ik(tip @ np.linalg.inv(tool), q0, continuous=True)
-                trajectory = plan_joint_move(q0, q1, self.kin.max_velocity * params.joint_speed,
-                                             self.kin.max_acceleration, accel=params.accel, decel=params.decel)
+            trajectory = plan_straight_move(self.kin, q0, tip, self.kin.max_velocity, self.kin.max_acceleration,
+                                            params.cartesian_speed_m_s, accel=params.accel, decel=params.decel,
+                                            tool=tool)
         except KinematicsError as err:
             raise ProgramError(err.message, err.code) from None
         trajectory = trajectory.stretched(max(trajectory.duration * params.time_scale, params.duration_s,

@@ -22,6 +22,7 @@ from __future__ import annotations
 import functools
 import importlib
 import importlib.util
+import logging
 import math
 import sys
 import types
@@ -159,7 +160,10 @@ def _libs() -> SimpleNamespace:
     import toppra.solverwrapper
     from scipy.interpolate import PPoly
 
-    toppra.setup_logging("WARNING")
+    # toppra logs a path it cannot time as warnings on stderr; the planner turns that into
+    # the controller's own error (or plans the line otherwise), so only toppra's fatal
+    # messages (a grid that is not increasing: a bug of ours) are let through.
+    logging.getLogger("toppra").setLevel(logging.CRITICAL)
     # Every toppra instance asks which optional solver packages are installed, searching
     # sys.path for each (a tenth of a MOVE's planning, more on a busy disk); the answer
     # cannot change while the process runs, so it is asked once.
@@ -242,11 +246,39 @@ def _accel_signs(t: np.ndarray, a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _solve(path, grid: np.ndarray, vel, acc):
-    out = _libs().algorithm.TOPPRA([vel, acc], path, gridpoints=grid, solver_wrapper="seidel",
-                                   parametrizer="ParametrizeConstAccel").compute_trajectory(0.0, 0.0)
+    out = _toppra(path, grid, vel, acc)
     if out is None:
+        # toppra bounds the squared path speed and acceleration (its MAXX, MAXU: 1e4), and
+        # a motion of a fraction of a millimetre moves the joints so little along s in
+        # [0, 1] that its sets of reachable speeds cannot be computed (about one straight
+        # line in ten of 0.05 mm, one in a hundred of 1 mm: a part arriving under a waiting
+        # tool).  The same path with s stretched to [0, rate], where its fastest coordinate
+        # changes by one per unit of s, is the same motion in better numbers.
+        rate = float(np.max(np.abs(path(grid, 1)), initial=0.0))
+        if 0.0 < rate < 1.0:
+            out = _toppra(_Stretched(path, rate), grid * rate, vel, acc)
+            if out is not None:
+                return out._ts, out._ss / rate, out._velocities / rate, out._us / rate
         raise KinematicsError.out_of_range("no feasible time parametrisation")
     return out._ts, out._ss, out._velocities, out._us
+
+
+def _toppra(path, grid: np.ndarray, vel, acc):
+    """toppra's time-optimal rest-to-rest parametrisation of `path` on `grid` (None: failed)."""
+    return _libs().algorithm.TOPPRA([vel, acc], path, gridpoints=grid, solver_wrapper="seidel",
+                                    parametrizer="ParametrizeConstAccel").compute_trajectory(0.0, 0.0)
+
+
+class _Stretched:
+    """A toppra geometric path with its parameter stretched `k` times: s' = k s."""
+
+    def __init__(self, path, k: float):
+        self.path, self.k = path, k
+        self.dof = path.dof
+        self.path_interval = np.asarray(path.path_interval, dtype=float) * k
+
+    def __call__(self, s, order: int = 0) -> np.ndarray:
+        return self.path(np.asarray(s, dtype=float) / self.k, order) / self.k ** order
 
 
 def _parametrize(path, grid: np.ndarray, vmax: np.ndarray, abounds: np.ndarray, refine: bool = False):
