@@ -158,9 +158,11 @@ def add_targets(spec: mujoco.MjSpec, config: CameraConfig) -> None:
         body = spec.worldbody.add_body(name=target_body(config.name, k), mocap=True, pos=list(PARKED))
         post = float(h) / MM - DISC_THICKNESS  # the disc's top face is at the post height
         body.add_geom(type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[plan.radius * 1.6 / MM, post / 2, 0],
-                      pos=[0, 0, post / 2], rgba=[0.3, 0.3, 0.32, 1], contype=0, conaffinity=0, group=CALIBRATION_GROUP)
+                      pos=[0, 0, post / 2], rgba=[0.3, 0.3, 0.32, 1], contype=0, conaffinity=0,
+                      group=CALIBRATION_GROUP)
         body.add_geom(type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[plan.radius / MM, DISC_THICKNESS / 2, 0],
-                      pos=[0, 0, post + DISC_THICKNESS / 2], material=matte.name, contype=0, conaffinity=0, group=CALIBRATION_GROUP)
+                      pos=[0, 0, post + DISC_THICKNESS / 2], material=matte.name, contype=0, conaffinity=0,
+                      group=CALIBRATION_GROUP)
 
 
 PLATE_GRID = (4, 11)  # OpenCV's asymmetric circles grid: dots per row, rows
@@ -198,7 +200,8 @@ def add_plate(spec: mujoco.MjSpec, config: CameraConfig) -> None:
     for x, y, _ in dots:
         body.add_geom(type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[plan.dot_radius / MM, DISC_THICKNESS / 2, 0],
                       pos=[x, y, 0.00005 - DISC_THICKNESS / 2], rgba=[0.05, 0.05, 0.06, 1],
-                      contype=0, conaffinity=0, group=CALIBRATION_GROUP)  # flush with the top face (0.05 mm proud: drawn over it)
+                      contype=0, conaffinity=0,
+                      group=CALIBRATION_GROUP)  # flush with the top face (0.05 mm proud: drawn over it)
 
 
 def add_camera(spec: mujoco.MjSpec, config: CameraConfig, scene_path: str | None = None) -> None:
