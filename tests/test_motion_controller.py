@@ -544,3 +544,22 @@ def test_blended_motions_stay_within_the_joint_speed_and_acceleration_limits(mon
     overlaps = [m.overlap_s for m in sim.controller.history]
     assert overlaps[1] == 0.0 and overlaps[2] == 0.0  # down onto a, then straight back up
     assert overlaps[3] > 0 and overlaps[4] > 0  # up into the transfer, the transfer down to b
+
+
+def test_a_robot_held_off_its_destination_times_out_nulling_rather_than_deadlocking():
+    """BREAK waits for the joints to settle within FINE.  A robot held off its destination
+    (here a 150 N push up on the quill; in the field, a part pressed onto a pile) never
+    does: after the nulling time-out the program stops with V+'s *Time-out nulling errors*
+    (-1003) at the BREAK, not with the watchdog's *Deadlock*, which confirms a fixed point in
+    1 s but must leave a wait with a deadline to end by itself."""
+    sim = Simulation(SCARA)
+    sim.controller.settings.monitor_speed = 100.0
+    console = Console(echo=None)
+    system = VPlusSystem(sim.controller, sim.io, sim.clock, console=console)
+    for name, loc in {**sim.taught_locations(), "a": A}.items():
+        system.define_location(name, loc)
+    sim.scheduler.add(system.start(system.load_text(_program("MOVE a", "BREAK", 'TYPE "settled"'), "test.pg")[0]))
+    sim.cell.data.xfrc_applied[sim.cell.model.body("quill").id, 2] = 150.0
+    outcome = sim.run(max_sim_time=20.0)
+    assert [(e["code"], e["message"], e["line"]) for e in outcome.errors] == [(-1003, "*Time-out nulling errors*", 3)]
+    assert "settled" not in "".join(console.text)

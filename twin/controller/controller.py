@@ -41,6 +41,7 @@ from .kinematics import KinematicsError, RobotKinematics
 from .location import NULL, Location
 from .tracking import BeltPath, Tracking
 from .trajectory import Trajectory, plan_joint_move, plan_straight_move
+from .watchdog import timed
 
 NULLING_TIMEOUT = -1003  # V+ "*Time-out nulling errors*" (V+ guide v17 L5832)
 COLLISION = -1020  # "*Collision detected*": twin-defined (the real controller does not see the cell)
@@ -751,7 +752,7 @@ class VirtualController:
         if not self.stopped(tolerance):
             deadline = self.cell.time + NULLING_TIMEOUT_S
             cell = self.cell
-            yield lambda: self.stopped(tolerance) or cell.time >= deadline
+            yield timed(lambda: self.stopped(tolerance) or cell.time >= deadline)
             if not self.stopped(tolerance):
                 raise ProgramError("*Time-out nulling errors*", NULLING_TIMEOUT)
 

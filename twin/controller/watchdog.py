@@ -5,7 +5,8 @@ Three rules, checked once per major cycle (docs/robustness.md, "Runaways"):
 * **Deadlock**: nothing can change any more.  Every live task is blocked on a
   condition (a V+ WAIT, WAIT.EVENT without a timeout, a GPL Join, WaitEvent,
   a signal wait...), no task read the clock while it waited (a time-out or a
-  TIMER() test will end the wait), the robot has no motion queued, and the
+  TIMER() test will end the wait) or waits with a deadline of its own (`timed`:
+  the servos' nulling time-out), the robot has no motion queued, and the
   cell is at rest (no signal changed, no cell event, no body moving, no
   encoder counting, no part source that will bring a part).  The state is
   then a fixed point of the whole simulation: each later cycle is the same as
@@ -49,6 +50,14 @@ def external(condition: Callable[[], bool]) -> Callable[[], bool]:
     """Mark a wait condition as driven from outside the twin (a socket): the watchdog never
     takes a task blocked on it for a deadlock, and the no-progress clock waits with it."""
     condition.external = True  # type: ignore[attr-defined]
+    return condition
+
+
+def timed(condition: Callable[[], bool]) -> Callable[[], bool]:
+    """Mark a wait condition that ends by itself at a deadline of simulated time (the servos'
+    nulling time-out): a task waiting on it is not blocked for good, so the wait ends with
+    its own error, not a deadlock."""
+    condition.timed = True  # type: ignore[attr-defined]
     return condition
 
 
@@ -119,9 +128,9 @@ def describe_task(task: Any) -> str:
 
 
 def task_is_blocked(wait: Any, slice_token: Any) -> bool:
-    """A task whose last yield was a wait condition, a V+ WAIT's release or a bare WAIT (not a
-    used-up time slice: that one is computing)."""
-    if wait is None or wait is slice_token:
+    """A task whose last yield was a wait condition (not a `timed` one), a V+ WAIT's release
+    or a bare WAIT (not a used-up time slice: that one is computing)."""
+    if wait is None or wait is slice_token or getattr(wait, "timed", False):
         return False
     return wait is RELEASE or wait is NEXT_CYCLE or callable(wait)
 
