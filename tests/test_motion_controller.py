@@ -48,18 +48,22 @@ class Probe:
         """Cell events are in the report; not needed here."""
 
 
-def run_on_cell(text: str, scene: Path = SCARA, locations: dict | None = None, max_time: float = 20.0):
-    """Run V+ `text` on a cell (monitor speed 100 unless the program says otherwise)."""
+def run_on_cell(text: str, scene: Path = SCARA, locations: dict | None = None, max_time: float = 20.0,
+                prepare=None, console: Console | None = None):
+    """Run V+ `text` on a cell (monitor speed 100 unless the program says otherwise);
+    `prepare(sim)` is called just before the run."""
     sim = Simulation(scene)
     probe = Probe(sim)
     sim.recorder = probe
     sim.controller.settings.monitor_speed = 100.0
-    system = VPlusSystem(sim.controller, sim.io, sim.clock, console=Console(echo=None))
+    system = VPlusSystem(sim.controller, sim.io, sim.clock, console=console or Console(echo=None))
     for name, loc in {**sim.taught_locations(), **(locations or {})}.items():
         system.define_location(name, loc)
     name = system.load_text(text, "test.pg")[0]  # the first program is the main one
     task = system.start(name)
     sim.scheduler.add(task)
+    if prepare is not None:
+        prepare(sim)
     outcome = sim.run(max_sim_time=max_time)
     return sim, task, outcome, probe.rows
 
@@ -552,14 +556,11 @@ def test_a_robot_held_off_its_destination_times_out_nulling_rather_than_deadlock
     does: after the nulling time-out the program stops with V+'s *Time-out nulling errors*
     (-1003) at the BREAK, not with the watchdog's *Deadlock*, which confirms a fixed point in
     1 s but must leave a wait with a deadline to end by itself."""
-    sim = Simulation(SCARA)
-    sim.controller.settings.monitor_speed = 100.0
+    def push_the_quill(sim: Simulation) -> None:
+        sim.cell.data.xfrc_applied[sim.cell.model.body("quill").id, 2] = 150.0
+
     console = Console(echo=None)
-    system = VPlusSystem(sim.controller, sim.io, sim.clock, console=console)
-    for name, loc in {**sim.taught_locations(), "a": A}.items():
-        system.define_location(name, loc)
-    sim.scheduler.add(system.start(system.load_text(_program("MOVE a", "BREAK", 'TYPE "settled"'), "test.pg")[0]))
-    sim.cell.data.xfrc_applied[sim.cell.model.body("quill").id, 2] = 150.0
-    outcome = sim.run(max_sim_time=20.0)
+    _, _, outcome, _ = run_on_cell(_program("MOVE a", "BREAK", 'TYPE "settled"'), locations={"a": A},
+                                   prepare=push_the_quill, console=console)
     assert [(e["code"], e["message"], e["line"]) for e in outcome.errors] == [(-1003, "*Time-out nulling errors*", 3)]
     assert "settled" not in "".join(console.text)

@@ -160,9 +160,9 @@ def _libs() -> SimpleNamespace:
     import toppra.solverwrapper
     from scipy.interpolate import PPoly
 
-    # toppra logs a path it cannot time as warnings on stderr; the planner turns that into
-    # the controller's own error (or plans the line otherwise), so only toppra's fatal
-    # messages (a grid that is not increasing: a bug of ours) are let through.
+    # toppra logs a path it cannot time as warnings on stderr; the planner times it again
+    # on a stretched parameter or raises the controller's own error (`_solve`), so only
+    # toppra's fatal messages (a grid that is not increasing: a bug of ours) are let through.
     logging.getLogger("toppra").setLevel(logging.CRITICAL)
     # Every toppra instance asks which optional solver packages are installed, searching
     # sys.path for each (a tenth of a MOVE's planning, more on a busy disk); the answer

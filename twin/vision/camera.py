@@ -4,14 +4,14 @@ An image is taken only when asked (a vision process, the recorder): nothing rend
 step.  The renderer is a pinhole with square pixels and the principal point at the image
 centre.  The exposure scales every light of the scene as the camera renders it (the light
 that reaches the sensor, before it saturates); lens distortion (OpenCV's k1, k2, p1, p2,
-k3 model) is applied to the rendered image with ``cv2.remap``, then seeded Gaussian noise.  The noise of
-a frame is a window of a bank of Gaussian draws (each rounded to a grey level) made once
-per camera from ``default_rng(seed)``, at an offset drawn for frame n from
-``default_rng([seed, n])``: the same run gives the same images bit for bit, each pixel's
-noise is N(0, noise) as if drawn for it, and a pixel takes a different draw in each frame
-(the pattern repeats across frames only shifted).  Drawing a frame's 921,600 normals was
-10-13 ms a frame on the CPU, the window 0.3 ms.  Headless rendering needs ``MUJOCO_GL=egl`` (Mesa llvmpipe on a machine
-without a GPU) or ``MUJOCO_GL=osmesa``.
+k3 model) is applied to the rendered image with ``cv2.remap``, then seeded Gaussian
+noise.  The noise of a frame is a window of a bank of Gaussian draws (each rounded to a
+grey level) made once per camera from ``default_rng(seed)``, at an offset drawn for frame
+n from ``default_rng([seed, n])``: the same run gives the same images bit for bit, each
+pixel's noise is N(0, noise) as if drawn for it, and a pixel takes a different draw in
+each frame (the pattern repeats across frames only shifted).  Drawing a frame's 921,600
+normals was 10-13 ms a frame on the CPU, the window 0.3 ms.  Headless rendering needs
+``MUJOCO_GL=egl`` (Mesa llvmpipe on a machine without a GPU) or ``MUJOCO_GL=osmesa``.
 """
 
 from __future__ import annotations
