@@ -4,8 +4,10 @@ scatter all it lays out; recycled bodies keep every part's report entry."""
 
 from __future__ import annotations
 
+import numpy as np
+
 from twin.physics.cell import Cell
-from twin.physics.parts import MAX_RECYCLED_BODIES
+from twin.physics.parts import MAX_RECYCLED_BODIES, RETIRED
 
 from conftest import SCARA_SCENE
 
@@ -41,3 +43,31 @@ def test_recycled_bodies_keep_every_parts_report_entry(tmp_path):
     assert all(e["region"] == "bin" and not e["dropped"] for e in mine), mine
     assert len({tuple(e["pose"][:2]) for e in mine}) == 7  # each where it came to rest
     assert parts.size == 3
+
+
+def test_a_part_landing_on_a_retired_one_neither_moves_nor_wakes_it(tmp_path):
+    """A retired part is a static copy of it (a mocap body) where it came to rest: a part
+    dropped onto it lands and rests on it, leaves it exactly where it was and is an island
+    of its own (before, it woke the retired part and pushed it about a millimetre)."""
+    cell = _cell(tmp_path, 3)
+    parts, feeder = cell.parts, cell.ctx.component("feeder", "nest")
+    d, m = cell.data, cell.model
+    floor_z = cell.ctx.regions.lo[cell.ctx.regions.index("bin")][2] + 0.01  # m
+    first = parts.take(feeder)
+    parts.activate(first, [0.18, 0.6, floor_z + 0.02], [1, 0, 0, 0], where="bin")
+    cell.step(500)  # 1 s: falls, comes to rest, retires
+    assert parts.state[first] == RETIRED
+    resting = parts.position(first)
+    assert resting[2] < floor_z + 0.02
+    second = parts.take(feeder)
+    parts.activate(second, resting + [0.005, 0.0, 0.05], [1, 0, 0, 0], where="bin")
+    heap_tree = m.body_treeid[parts.body[first]]
+    touched = False
+    for _ in range(500):
+        cell.step(1)
+        touched |= any(set(c.geom) == {parts.geom[second], parts.rest_geom[first]} for c in d.contact[:d.ncon])
+        assert d.tree_asleep[heap_tree] >= 0  # the retired part's free body sleeps under the floor
+    assert touched
+    assert np.array_equal(parts.position(first), resting)
+    assert parts.state[second] == RETIRED
+    assert parts.position(second)[2] > resting[2] + 0.015  # on top of the first (parts are 20 mm tall)

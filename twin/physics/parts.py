@@ -42,7 +42,6 @@ RETIRE_CHECKS = 3  # ... at this many floor checks in a row (0.1 s apart) retire
 # bin gets 14 ms.  Stiffer (4 ms, the stiffest a 2 ms step allows) let a part settle in the
 # nest where the closing jaw's finger struck it (docs/performance.md).
 PART_SOLREF = [0.008, 1.0]
-RETIRED_DAMPING = (1e5, 100.0)  # N s/m and N m s/rad on a retired part's free joint (~um/s under a part's weight)
 # Bodies a feeder or source builds per part type, whatever its `pool` asks: every body
 # costs every physics step, asleep or parked (MuJoCo's per-dof work; measured 57 ns a body
 # a step, a 2000-body pool made the demo 2.8x slower), and so does a bigger heap of
@@ -110,23 +109,27 @@ class PartPool(Component):
             if self.sleep:
                 body.sleep = mujoco.mjtSleepPolicy.mjSLEEP_INIT
             body.add_freejoint(name=f"part_{i}_free")
+            # Its rest body (see `_retire`): where the part lies once retired, static.
+            rest = wb.add_body(name=f"part_{i}_rest", pos=self._park_pos(i), mocap=True)
             shape = dict(mass=t.mass, friction=[t.friction, 0.005, 0.0001], contype=0, conaffinity=0,
                          rgba=t.rgba, solref=PART_SOLREF)
             if t.shape == "box":
                 half = np.array(t.size, dtype=float) / MM / 2
-                body.add_geom(name=f"part_{i}_geom", type=mujoco.mjtGeom.mjGEOM_BOX, size=half, **shape)
+                shape.update(type=mujoco.mjtGeom.mjGEOM_BOX, size=half)
                 half_z.append(half[2])
             elif t.shape == "cylinder":
                 r, h = t.radius / MM, t.height / MM / 2
-                body.add_geom(name=f"part_{i}_geom", type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[r, h, 0], **shape)
+                shape.update(type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[r, h, 0])
                 half_z.append(h)
             else:
                 # Compiled as able to collide, so that MuJoCo builds the mesh's convex hull (it
                 # skips it for a mesh no colliding geom uses, and a hull-less mesh touches with
                 # one point: a plate on a face rocks and sinks); parked by `bind`.
-                body.add_geom(name=f"part_{i}_geom", type=mujoco.mjtGeom.mjGEOM_MESH,
-                              meshname=f"part_mesh_{tname}", **{**shape, "contype": RETIRED_CONTYPE})
+                shape.update(type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"part_mesh_{tname}",
+                             contype=RETIRED_CONTYPE)
                 half_z.append(meshes[tname])
+            body.add_geom(name=f"part_{i}_geom", **shape)
+            rest.add_geom(name=f"part_{i}_rest_geom", **shape)
         self._half_z = np.array(half_z)
 
     @staticmethod
@@ -141,9 +144,14 @@ class PartPool(Component):
         self.geom = np.array([m.geom(f"part_{i}_geom").id for i in range(n)], dtype=int)
         self.qadr = np.array([m.jnt_qposadr[m.joint(f"part_{i}_free").id] for i in range(n)], dtype=int)
         self.dadr = np.array([m.jnt_dofadr[m.joint(f"part_{i}_free").id] for i in range(n)], dtype=int)
-        m.geom_contype[self.geom] = 0  # parked: no contacts (see the mesh geoms in `build`)
+        self.rest_body = np.array([m.body(f"part_{i}_rest").id for i in range(n)], dtype=int)
+        self.rest_geom = np.array([m.geom(f"part_{i}_rest_geom").id for i in range(n)], dtype=int)
+        self.mocap = m.body_mocapid[self.rest_body]
+        self.shown = self.body.copy()  # the body that holds each part's pose: its rest body once retired
+        m.geom_contype[self.geom] = m.geom_contype[self.rest_geom] = 0  # parked: no contacts (see `build`)
+        m.body_contype[self.rest_body] = m.body_conaffinity[self.rest_body] = 0
         self.geom_part = np.full(m.ngeom, -1, dtype=int)  # geom id -> body index
-        self.geom_part[self.geom] = np.arange(n)
+        self.geom_part[self.geom] = self.geom_part[self.rest_geom] = np.arange(n)
         self.state = np.zeros(n, dtype=int)
         self.instance_of = np.full(n, -1, dtype=int)
         self.since = np.zeros(n)  # time of the last change of state
@@ -198,21 +206,37 @@ class PartPool(Component):
 
     def park(self, i: int) -> None:
         """Freeze body i's instance report where it is and send the body back under the floor."""
-        m, d = self.model, self.data
         iid = int(self.instance_of[i])
         if iid >= 0:
             self.instances[iid]["frozen"] = self._entry(iid)
+        if self.state[i] == RETIRED:  # its rest body leaves the heap
+            self._set_rest(i, self._park_pos(i), [1.0, 0.0, 0.0, 0.0], 0, 0)
+            self.shown[i] = self.body[i]
+        else:
+            self._stow(i)
+        self.state[i] = PARKED
+        self.instance_of[i] = -1
+        self.live = self.live[self.live != i]
+
+    def _stow(self, i: int) -> None:
+        """Body i under the floor: no contacts, gravity compensated, at rest (it falls asleep)."""
+        m, d = self.model, self.data
         b, qa, da = self.body[i], self.qadr[i], self.dadr[i]
         self._set_contacts(i, 0, 0)
         m.body_gravcomp[b] = 1.0
-        m.dof_damping[da:da + 6] = 0.0
         d.qpos[qa:qa + 3] = self._park_pos(i)
         d.qpos[qa + 3:qa + 7] = [1.0, 0.0, 0.0, 0.0]
         d.qvel[da:da + 6] = 0.0
         d.qvel[da + 2] = -1e-9
-        self.state[i] = PARKED
-        self.instance_of[i] = -1
-        self.live = self.live[self.live != i]
+
+    def _set_rest(self, i: int, pos, quat, contype: int, conaffinity: int) -> None:
+        """Body i's rest body (a mocap body: static, no degrees of freedom) at pos / quat
+        (m, wxyz) with the given contact bits."""
+        m, d, b, k, g = self.model, self.data, self.rest_body[i], self.mocap[i], self.rest_geom[i]
+        d.mocap_pos[k] = d.xpos[b] = pos
+        d.mocap_quat[k] = d.xquat[b] = quat
+        m.geom_contype[g] = m.body_contype[b] = contype
+        m.geom_conaffinity[g] = m.body_conaffinity[b] = conaffinity
 
     def hold(self, i: int, held: bool) -> None:
         """Body i is held by a grasp (True: it no longer touches the robot) or let go (False)."""
@@ -249,7 +273,8 @@ class PartPool(Component):
         self.ctx.event("dropped", part=inst["id"], where=where, cause=cause)
 
     def position(self, i: int) -> np.ndarray:
-        return self.data.xpos[self.body[i]].copy()
+        """World position of body i's part (m): where it rests once retired."""
+        return self.data.xpos[self.shown[i]].copy()
 
     def wake_body(self, i: int) -> None:
         """Keep body i awake: a sleeping tree wakes at the next step when it has a nonzero
@@ -315,19 +340,20 @@ class PartPool(Component):
         """Freeze a part that has come to rest in a bin or tray.
 
         A heap of parts in contact is one island: every part landing on it would wake it all
-        and the cost grows with the heap (measured: 100 parts -> slower than real time). A
-        retired part keeps its rest pose, is gravity compensated and heavily damped, and
-        touches only live parts (so new parts still land on the heap), never other retired
-        parts or the bin: the heap costs nothing, and parts landing on it move a retired
-        part by about a millimetre at most (measured 1.1 mm over a 40-part heap).
+        and the cost grows with the heap (measured: 100 parts -> slower than real time).  A
+        retired part is its rest body, a static copy of it (MuJoCo's mocap body: no degrees
+        of freedom) put where it came to rest, while its free body waits under the floor.
+        The rest body touches only live parts (so new parts still land on the heap), never
+        other retired parts or the bin, and a part landing on it is an island of its own:
+        the heap costs only its contacts with the parts landing on it.  (Before, a retired
+        part was its free body, damped: each part it touched woke it, and the awake heap
+        was a quarter of the demo's physics, docs/performance.md.)
         """
-        m, d = self.model, self.data
-        b, da = self.body[i], self.dadr[i]
-        self._set_contacts(i, RETIRED_CONTYPE, RETIRED_CONAFFINITY)
-        m.body_gravcomp[b] = 1.0
-        m.dof_damping[da:da + 3] = RETIRED_DAMPING[0]
-        m.dof_damping[da + 3:da + 6] = RETIRED_DAMPING[1]
-        d.qvel[da:da + 6] = 0.0
+        d = self.data
+        b = self.body[i]
+        self._set_rest(i, d.xpos[b].copy(), d.xquat[b].copy(), RETIRED_CONTYPE, RETIRED_CONAFFINITY)
+        self._stow(i)
+        self.shown[i] = self.rest_body[i]
         self.state[i] = RETIRED
         self.since[i] = float(d.time)
         if self.instance(i)["missed"]:
@@ -336,7 +362,7 @@ class PartPool(Component):
     # ------------------------------------------------------------------ reports
     def _entry(self, iid: int) -> dict:
         inst = self.instances[iid]
-        b = self.body[inst["body"]]
+        b = self.shown[inst["body"]]
         pos, quat = self.data.xpos[b], self.data.xquat[b]
         entry = {"id": iid, "type": inst["type"],
                  "pose": [round(float(v) * MM, 3) for v in pos] + [round(float(v), 6) for v in quat],

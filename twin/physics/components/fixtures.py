@@ -145,9 +145,9 @@ class Tray(Component):
         retired = parts.live[parts.state[parts.live] == RETIRED]
         if not len(retired):
             return
-        pos = parts.data.xpos[parts.body[retired]]
+        pos = parts.data.xpos[parts.shown[retired]]
         here = retired[self.ctx.regions.first_index(pos) == self._region]
-        cells = {self.cell_of(parts.data.xpos[parts.body[i]]) for i in here.tolist()} - {None}
+        cells = {self.cell_of(parts.data.xpos[parts.shown[i]]) for i in here.tolist()} - {None}
         if len(cells) == len(self.cell_centres):
             for i in here.tolist():
                 parts.park(i)

@@ -121,8 +121,8 @@ class PresenceSensor(Component):
     def check(self, t: float) -> None:
         parts = self.parts
         live = parts.live
-        on = bool(len(live)) and bool(np.all((parts.data.xpos[parts.body[live]] >= self.lo)
-                                             & (parts.data.xpos[parts.body[live]] <= self.hi), axis=1).any())
+        pos = parts.data.xpos[parts.shown[live]]
+        on = bool(len(live)) and bool(np.all((pos >= self.lo) & (pos <= self.hi), axis=1).any())
         if on != self.state:
             self.state = on
             self.ctx.io.set(self.config.input, on)

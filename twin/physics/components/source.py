@@ -94,7 +94,7 @@ class Source(Component):
         mine = self.bodies[parts.instance_of[self.bodies] >= 0]
         if not len(mine):
             return
-        local = belt.to_local(parts.data.xpos[parts.body[mine]])
+        local = belt.to_local(parts.data.xpos[parts.shown[mine]])
         off = (np.abs(local[:, 0]) > belt.length / 2) | (np.abs(local[:, 1]) > belt.width / 2) | (local[:, 2] < -0.01)
         held = self.ctx.held_part()
         for i in mine[off].tolist():
