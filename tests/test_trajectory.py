@@ -98,6 +98,23 @@ def test_sample_times_include_the_end(kin):
     assert np.array_equal(traj.at(10.0)[0], traj.q_end)
 
 
+def test_a_plan_run_again_is_sampled_once_and_read_only(kin):
+    """A cyclic program runs its cached plans over and over at the monitor speed: the slowed
+    plan and its samples are made once, and the shared samples cannot be changed in place."""
+    tr = plan_joint_move(kin.lower * 0.3, kin.upper * 0.3, kin.max_velocity, kin.max_acceleration)
+    slow = tr.stretched(2 * tr.duration)
+    assert tr.stretched(2 * tr.duration) is slow
+    assert slow.duration == pytest.approx(2 * tr.duration)
+    times, q, qd = slow.sample(0.002)
+    again = slow.sample(0.002)
+    assert all(a is b for a, b in zip((times, q, qd), again))
+    with pytest.raises(ValueError):
+        q[0, 0] = 1.0
+    _, q_fine, _ = slow.sample(0.001)  # another step: sampled anew
+    assert np.allclose(q_fine[:2 * (len(q) - 1):2], q[:-1]) and np.array_equal(q_fine[-1], q[-1])
+    assert slow.accel_time == pytest.approx(2 * tr.accel_time) and slow.decel_time == pytest.approx(2 * tr.decel_time)
+
+
 def test_zero_length_moves(kin):
     q = np.array([0.2, 1.0, 0.1, 0.3])
     traj = plan_joint_move(q, q, kin.max_velocity, kin.max_acceleration)

@@ -69,6 +69,10 @@ class Trajectory:
     _a: np.ndarray = field(repr=False)  # d2s/dt2 on each segment (m), constant
     _path: PPoly | _Line | None = field(default=None, repr=False)  # s -> q
     _dpath: PPoly | _Line | None = field(default=None, repr=False)  # s -> dq/ds
+    # A cyclic program runs the same (cached) plans over and over: the last `stretched` and
+    # `sample` of this plan, kept (a fifth of the demo's time in the interpreter went there).
+    _last_stretch: tuple = field(default=(None, None), init=False, repr=False, compare=False)
+    _last_sample: tuple = field(default=(None, None), init=False, repr=False, compare=False)
 
     @classmethod
     def still(cls, q: np.ndarray) -> "Trajectory":
@@ -97,10 +101,16 @@ class Trajectory:
         there.  The last sample is exactly `q_end` at rest."""
         if dt <= 0:
             raise ValueError("dt must be positive")
+        last_dt, samples = self._last_sample
+        if last_dt == dt:
+            return samples
         k = int(math.ceil(self.duration / dt - 1e-9))
         times = np.arange(k + 1, dtype=float) * dt
         times[-1] = self.duration
         q, qd = self._eval(times)
+        for array in (times, q, qd):
+            array.flags.writeable = False  # shared by every run of this plan
+        self._last_sample = (dt, (times, q, qd))
         return times, q, qd
 
     def at(self, t: float) -> tuple[np.ndarray, np.ndarray]:
@@ -115,7 +125,7 @@ class Trajectory:
         keep, sign = _accel_signs(self._t, self._a)
         return self._t[:-1][keep], np.diff(self._t)[keep], sign
 
-    @property
+    @functools.cached_property
     def accel_time(self) -> float:
         """Length of the acceleration phase: from the start until the path speed stops rising."""
         if self.duration <= 0.0 or len(self._a) == 0:
@@ -124,7 +134,7 @@ class Trajectory:
         falling = np.flatnonzero(sign <= 0)
         return float(start[falling[0]]) if len(falling) else self.duration
 
-    @property
+    @functools.cached_property
     def decel_time(self) -> float:
         """Length of the final deceleration phase: from the last moment the path speed was not
         falling until the end (V+ guide v17 "Robot Speed": accelerate, travel, decelerate)."""
@@ -142,9 +152,13 @@ class Trajectory:
         DURATION); a motion that already takes that long is returned unchanged."""
         if self.duration <= 0.0 or duration <= self.duration:
             return self
-        f = duration / self.duration
-        return Trajectory(duration, self.q_start, self.q_end, self._t * f, self._s, self._v / f,
-                          self._a / (f * f), self._path, self._dpath)
+        last_duration, slower = self._last_stretch
+        if last_duration != duration:
+            f = duration / self.duration
+            slower = Trajectory(duration, self.q_start, self.q_end, self._t * f, self._s, self._v / f,
+                                self._a / (f * f), self._path, self._dpath)
+            self._last_stretch = (duration, slower)
+        return slower
 
 
 # ---------------------------------------------------------------- toppra
