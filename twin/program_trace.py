@@ -6,7 +6,8 @@ costs one entry), and the tool-tip path of each motion the controller plans.
 Called once per major cycle from Simulation._record.  The console's chunks are read from
 where the last cycle left off (never the whole output again); a line still open at the end
 of the run goes out at `close`.  Where a task or thread is costs one walk down its chain of
-generators per cycle (a few microseconds), the same walk the watchdog's message makes.
+generators (a few microseconds), the same walk the watchdog's message makes, in the cycles
+where some task ran (most cycles a program only waits for its motion).
 """
 
 from __future__ import annotations
@@ -29,6 +30,8 @@ class ProgramTrace:
         self._partial = ""        # typed text after the last line break
         self._where: dict[str, tuple[str, int] | None] = {}
         self._thread_entities: dict[int, str] = {}   # escaping a name costs more than the lookup
+        self._scheduler = None if simulation is None else simulation.scheduler
+        self._runs = -1  # the scheduler's `runs` when the tasks were last looked at
         if simulation is not None:
             simulation.controller.on_plan = PlanTrace(recorder, simulation.cell).plan
 
@@ -39,6 +42,10 @@ class ProgramTrace:
             self._chunks = len(text)
             for line in lines:
                 self.recorder.log_text(t, line, path="program/log")
+        if self._scheduler is not None:  # no task ran since the last look: none moved on
+            if self._scheduler.runs == self._runs:
+                return
+            self._runs = self._scheduler.runs
         for entity, where in self._positions().items():
             if self._where.get(entity) == where:
                 continue

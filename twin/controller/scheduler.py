@@ -80,6 +80,12 @@ class Scheduler:
         return self._waits.get(id(task))
 
     @property
+    def runs(self) -> int:
+        """How many times a task has been resumed: where the tasks are (and what they did)
+        changes only when this grows."""
+        return self._runs
+
+    @property
     def alive(self) -> bool:
         return any(not t.finished and not getattr(t, "paused", False) for t in self.tasks)
 
