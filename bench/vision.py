@@ -109,13 +109,14 @@ def conveyor_rate(seconds: float) -> None:
               f"{r.counts['missed']} missed")
 
 
-def demo_with_camera(fps: float = 10.0, baseline: bool = True) -> tuple[float, float | None, int]:
+def demo_with_camera(fps: float = 10.0, baseline: bool = True) -> tuple[float, float | None, int, float]:
     """The demo with a camera taking a picture (render, lens, noise) every 1/fps simulated
-    seconds; returns (real-time factor, the same run without pictures or None, pictures)."""
+    seconds; returns (real-time factor, the same run without pictures or None, pictures,
+    median wall seconds a picture took)."""
     with tempfile.TemporaryDirectory() as tmp:
         scene = Path(tmp) / "scara_pick_camera.toml"
         scene.write_text(DEMO_SCENE.read_text() + DEMO_CAMERA)
-        rates, cpu_rates, pictures = [], [], 0
+        rates, cpu_rates, pictures, picture_s = [], [], 0, []
         for shoot in (True, False) if baseline else (True,):
             started = start_program(DEMO, scene=scene, console=Console(stdin=io.StringIO(), echo=None))
             sim = started.simulation
@@ -124,7 +125,9 @@ def demo_with_camera(fps: float = 10.0, baseline: bool = True) -> tuple[float, f
 
             def on_cycle():
                 if shoot and sim.cell.time >= due[0]:
+                    start = time.perf_counter()
                     camera.shoot(sim.cell.data)
+                    picture_s.append(time.perf_counter() - start)
                     due[0] += 1.0 / fps
 
             cpu = time.process_time()
@@ -136,7 +139,7 @@ def demo_with_camera(fps: float = 10.0, baseline: bool = True) -> tuple[float, f
             cpu_rates.append(r.sim_time_s / cpu)
             pictures = max(pictures, camera.frames)
     print(f"    (per CPU second: {' and '.join(f'{v:.1f}x' for v in cpu_rates)})")
-    return rates[0], rates[1] if baseline else None, pictures
+    return rates[0], rates[1] if baseline else None, pictures, statistics.median(picture_s)
 
 
 def layouts(n: int) -> None:
@@ -167,9 +170,9 @@ def main() -> None:
     rendering(args.frames)
     demo_rate()
     conveyor_rate(args.conveyor_s)
-    with_camera, without, pictures = demo_with_camera()
+    with_camera, without, pictures, picture_s = demo_with_camera()
     print(f"demo with a camera at 10 frames per simulated second: {with_camera:.1f}x real time "
-          f"({pictures} pictures; {without:.1f}x without them)")
+          f"({pictures} pictures, {picture_s * 1e3:.1f} ms each; {without:.1f}x without them)")
     if args.layouts:
         layouts(args.layouts)
 
