@@ -105,6 +105,26 @@ def test_ik_recovers_random_joint_vectors(kin):
         assert np.allclose(got, q, atol=1e-9)
 
 
+def test_scara_ik_is_the_closed_form_where_it_lands(kin, monkeypatch):
+    """A SCARA's closed form is exact: `ik` checks it with one forward kinematics instead of
+    refining it (belt tracking solves one every servo step); the answer is the refined one."""
+    rng = np.random.default_rng(7)
+    cases = []
+    for _ in range(100):
+        q = rng.uniform(kin.lower, kin.upper)
+        q[1] = np.sign(q[1]) * max(abs(q[1]), 0.05)
+        cases.append((kin.fk(q).copy(), q + rng.normal(0, 0.2, 4), kin.is_righty(q)))
+    refined = [kin._refine(T, kin._scara_ik(T, seed, righty, False)) for T, seed, righty in cases]
+
+    def no_refine(*args, **kwargs):
+        raise AssertionError("refined a closed form that lands")
+    monkeypatch.setattr(kin, "_refine", no_refine)
+    for (T, seed, righty), want in zip(cases, refined):
+        got = kin.ik(T, seed, righty=righty)
+        assert np.allclose(got, want, atol=1e-12)
+        assert np.abs(kin.fk(got)[:3, 3] - T[:3, 3]).max() < 1e-10
+
+
 def test_configuration_is_honoured_and_none_keeps_the_seeds(kin):
     T = _pose(0.35, 0.2, 0.3, 20)
     qr = kin.ik(T, np.zeros(4), righty=True)

@@ -375,9 +375,10 @@ class RobotKinematics:
             T[:3, 3] -= self.rail_offset(q_seed)
         if self.scara is not None:
             q = self._scara_ik(T, q_seed, self.is_righty(q_seed) if righty is None else righty, continuous)
+            if not self._lands(T, q):
+                q = self._refine(T, q)
         else:
-            q = q_seed[:n].copy()
-        q = self._refine(T, q)
+            q = self._refine(T, q_seed[:n].copy())
         if single and self.revolute[n - 1]:
             q[n - 1] = float(_wrap(q[n - 1]))
         q = np.concatenate([q, q_seed[n:]])
@@ -450,6 +451,14 @@ class RobotKinematics:
             raise KinematicsError.out_of_range("too close to the J1 axis")
         q1, q2, q4 = self._scara_branches(q1, q2, psi, seed[s.shoulder], seed[s.wrist], within=not continuous)
         return s.joints(q1, q2, q3, q4)
+
+    def _lands(self, T: np.ndarray, q_arm: np.ndarray) -> bool:
+        """The arm's flange at q_arm is where T puts it, to 1e-10 m (what `_refine` asks).
+        A SCARA's closed form is exact on a model `_Scara.valid` accepts (about 1e-15 m on
+        the Cobra and the PF400) and builds J4 from T's yaw, so `_refine` would only check
+        it, at about ten times the cost of this one forward kinematics (belt tracking solves
+        an IK every servo step)."""
+        return bool(np.all(np.abs(self._arm_fk(q_arm)[:3, 3] - T[:3, 3]) < 1e-10))
 
     def _task_error(self, T: np.ndarray, M: pin.SE3) -> np.ndarray:
         e = np.empty(6)
