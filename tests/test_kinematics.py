@@ -125,6 +125,24 @@ def test_scara_ik_is_the_closed_form_where_it_lands(kin, monkeypatch):
         assert np.abs(kin.fk(got)[:3, 3] - T[:3, 3]).max() < 1e-10
 
 
+def test_translation_rates_move_the_flange_without_turning_it(kin):
+    """Belt tracking's velocity feed-forward: the joint speeds whose flange twist is the
+    asked linear velocity and no rotation; the least-squares answer of the whole Jacobian,
+    also for the stretched arm, where the task rows are singular."""
+    rng = np.random.default_rng(3)
+    for _ in range(50):
+        q = rng.uniform(kin.lower, kin.upper)
+        v = rng.normal(0.0, 0.2, 3)
+        qd = kin.translation_rates(q, v)
+        twist = np.concatenate([v, np.zeros(3)])
+        assert np.allclose(qd, np.linalg.lstsq(kin.jacobian(q), twist, rcond=None)[0], atol=1e-9)
+        if abs(q[1]) > 0.05:  # away from the stretched arm, the twist is met exactly
+            assert np.allclose(kin.jacobian(q) @ qd, twist, atol=1e-9)
+    stretched = np.zeros(4)
+    qd = kin.translation_rates(stretched, np.array([0.1, 0.0, 0.0]))
+    assert np.all(np.isfinite(qd))
+
+
 def test_configuration_is_honoured_and_none_keeps_the_seeds(kin):
     T = _pose(0.35, 0.2, 0.3, 20)
     qr = kin.ik(T, np.zeros(4), righty=True)

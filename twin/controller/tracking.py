@@ -29,13 +29,6 @@ MM = 1000.0
 SHORT_LINE_M = 1e-4  # a motion shorter than this (a pure turn) spreads sigma over time instead
 
 
-def _twist_joints(kin: RobotKinematics, q: np.ndarray, velocity_m_s: np.ndarray) -> np.ndarray:
-    """Joint speeds that move the flange at `velocity_m_s` without turning it."""
-    twist = np.zeros(6)
-    twist[:3] = velocity_m_s
-    return np.linalg.lstsq(kin.jacobian(q), twist, rcond=None)[0]
-
-
 class _BeltEnd:
     """One end of a motion that rides on a belt: its belt travel when planned, and the
     travel direction in the robot base frame."""
@@ -95,7 +88,7 @@ class BeltPath:
         T = self.kin.fk(q).copy()
         T[:3, 3] += shift
         q_moved = self.kin.ik(T, q_seed, continuous=True)
-        return q_moved, qd + _twist_joints(self.kin, q_moved, velocity)
+        return q_moved, qd + self.kin.translation_rates(q_moved, velocity)
 
 
 class Tracking:
@@ -112,4 +105,4 @@ class Tracking:
         T = self.flange0.copy()
         T[:3, 3] += shift
         q = self.kin.ik(T, q_seed, continuous=True)
-        return q, _twist_joints(self.kin, q, velocity)
+        return q, self.kin.translation_rates(q, velocity)
