@@ -146,7 +146,7 @@ class PartPool(Component):
         self.dadr = np.array([m.jnt_dofadr[m.joint(f"part_{i}_free").id] for i in range(n)], dtype=int)
         self.rest_body = np.array([m.body(f"part_{i}_rest").id for i in range(n)], dtype=int)
         self.rest_geom = np.array([m.geom(f"part_{i}_rest_geom").id for i in range(n)], dtype=int)
-        self.mocap = m.body_mocapid[self.rest_body]
+        self._rest_mocap = m.body_mocapid[self.rest_body]
         self.shown = self.body.copy()  # the body that holds each part's pose: its rest body once retired
         m.geom_contype[self.geom] = m.geom_contype[self.rest_geom] = 0  # parked: no contacts (see `build`)
         m.body_contype[self.rest_body] = m.body_conaffinity[self.rest_body] = 0
@@ -232,7 +232,7 @@ class PartPool(Component):
     def _set_rest(self, i: int, pos, quat, contype: int, conaffinity: int) -> None:
         """Body i's rest body (a mocap body: static, no degrees of freedom) at pos / quat
         (m, wxyz) with the given contact bits."""
-        m, d, b, k, g = self.model, self.data, self.rest_body[i], self.mocap[i], self.rest_geom[i]
+        m, d, b, k, g = self.model, self.data, self.rest_body[i], self._rest_mocap[i], self.rest_geom[i]
         d.mocap_pos[k] = d.xpos[b] = pos
         d.mocap_quat[k] = d.xquat[b] = quat
         m.geom_contype[g] = m.body_contype[b] = contype
