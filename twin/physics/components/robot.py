@@ -54,7 +54,12 @@ class Robot(Component):
         if self.rail is not None:
             self._add_rail(spec, root)
         # The moving tree's root (the base itself when it rides a rail).
-        (root if self.rail is not None else root.first_body()).sleep = mujoco.mjtSleepPolicy.mjSLEEP_NEVER
+        moving = root if self.rail is not None else root.first_body()
+        moving.sleep = mujoco.mjtSleepPolicy.mjSLEEP_NEVER
+        # MuJoCo counts the moving robot's contacts every step (a contact sensor on its
+        # subtree, the gripper included: "found", at most one): most checks end there.
+        spec.add_sensor(name=CONTACT_SENSOR, type=mujoco.mjtSensor.mjSENS_CONTACT,
+                        objtype=mujoco.mjtObj.mjOBJ_XBODY, objname=moving.name, intprm=[1, 1, 1])
         self.gravity_compensate(spec)
 
     def _add_rail(self, spec: mujoco.MjSpec, root) -> None:
@@ -107,6 +112,7 @@ class Robot(Component):
         robot_body = np.array([self._descends_from(b, root) and m.body_weldid[b] != 0 for b in range(m.nbody)])
         self.robot_geom = robot_body[m.geom_bodyid]  # moving robot geoms, gripper included
         self._robot_contact_bits(robot_body)
+        self._contact_count = int(m.sensor_adr[m.sensor(CONTACT_SENSOR).id])  # in sensordata
         self._touching: set[tuple[int, int]] = set()
         self.collisions: list[dict] = []
         self._gripper = ctx.by_kind["gripper"]["gripper"]
@@ -236,9 +242,9 @@ class Robot(Component):
     def _collisions_now(self, t: float) -> set[tuple[int, int]]:
         """(robot geom, other geom) of each robot contact now that the gripper does not allow."""
         d = self.data
-        ncon = d.ncon
-        if not ncon:
+        if d.sensordata[self._contact_count] == 0.0:  # the robot touches nothing
             return set()
+        ncon = d.ncon
         contact = d.contact  # each attribute read copies MuJoCo's arrays: read them once
         g = contact.geom[:ncon]
         robot = self.robot_geom[g]
@@ -254,6 +260,7 @@ class Robot(Component):
                 if not gripper.contact_allowed(ours, int(parts.geom_part[other]), t)}
 
 
+CONTACT_SENSOR = "twin_robot_contacts"
 RAIL_BEAM_HEIGHT = 0.04  # m, between the bench and the base (a scene puts the base this high)
 RAIL_BEAM_WIDTH = 0.07  # m, half width
 RAIL_BEAM_END = 0.12  # m, beyond each end of the travel (half the carriage)
