@@ -11,7 +11,7 @@ from twin.controller.kinematics import (
     STRAIGHT_LINE_CONFIG,
     KinematicsError,
 )
-from twin.controller.trajectory import joint_move_time, plan_joint_move, plan_straight_move
+from twin.controller.trajectory import KEPT_SAMPLES, joint_move_time, plan_joint_move, plan_straight_move
 
 from conftest import tool_down_pose as _pose
 
@@ -113,6 +113,8 @@ def test_a_plan_run_again_is_sampled_once_and_read_only(kin):
     _, q_fine, _ = slow.sample(0.001)  # another step: sampled anew
     assert np.allclose(q_fine[:2 * (len(q) - 1):2], q[:-1]) and np.array_equal(q_fine[-1], q[-1])
     assert slow.accel_time == pytest.approx(2 * tr.accel_time) and slow.decel_time == pytest.approx(2 * tr.decel_time)
+    crawl = tr.stretched(KEPT_SAMPLES * 0.002 * 1.5)  # a slow crawl's samples are not kept
+    assert crawl.sample(0.002)[1] is not crawl.sample(0.002)[1]
 
 
 def test_zero_length_moves(kin):
