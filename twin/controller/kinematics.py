@@ -55,6 +55,7 @@ STRAIGHT_LINE_CONFIG = -1022  # "*Straight-line motion can't alter configuration
 
 TILT_TOLERANCE = 1e-4  # rad: a 4-axis robot cannot tilt its tool
 POSITION_TOLERANCE = 1e-6  # m: IK must land this close
+LANDED = 1e-10  # m and rad: `_refine` stops this close to the pose, and a closed form this close needs no refining
 LIMIT_EPS = 1e-9  # joint units: slack on the joint limits
 
 
@@ -443,7 +444,7 @@ class RobotKinematics:
             return None
         # The closed form is exact for a model `_Scara.valid` accepts (about 1e-15 m on the
         # Cobra and the PF400); `_refine` would stop at once.  J4 is built from the yaw.
-        if not np.all(np.abs(self.fk_positions(Q) - Ts[:, :3, 3]) < 1e-10):
+        if not np.all(np.abs(self.fk_positions(Q) - Ts[:, :3, 3]) < LANDED):
             return None
         return Q
 
@@ -470,12 +471,12 @@ class RobotKinematics:
         return s.joints(q1, q2, q3, q4)
 
     def _lands(self, T: np.ndarray, q_arm: np.ndarray) -> bool:
-        """The arm's flange at q_arm is where T puts it, to 1e-10 m (what `_refine` asks).
+        """The arm's flange at q_arm is where T puts it, to LANDED (what `_refine` asks).
         A SCARA's closed form is exact on a model `_Scara.valid` accepts (about 1e-15 m on
         the Cobra and the PF400) and builds J4 from T's yaw, so `_refine` would only check
         it, at about ten times the cost of this one forward kinematics (belt tracking solves
         an IK every servo step)."""
-        return bool(np.all(np.abs(self._arm_fk(q_arm)[:3, 3] - T[:3, 3]) < 1e-10))
+        return bool(np.all(np.abs(self._arm_fk(q_arm)[:3, 3] - T[:3, 3]) < LANDED))
 
     def _task_error(self, T: np.ndarray, M: pin.SE3) -> np.ndarray:
         e = np.empty(6)
@@ -491,7 +492,7 @@ class RobotKinematics:
             pin.forwardKinematics(model, data, q)
             M = pin.updateFramePlacement(model, data, fid)
             e = self._task_error(T, M)
-            if np.linalg.norm(e[:3]) < 1e-10 and np.all(np.abs(e[3:]) < 1e-10):
+            if np.linalg.norm(e[:3]) < LANDED and np.all(np.abs(e[3:]) < LANDED):
                 return q
             J = pin.computeFrameJacobian(model, data, q, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)[self._rows]
             lam = 1e-10 if self.scara is not None else 1e-6
